@@ -1,0 +1,72 @@
+"""The base of every core model: parameters, an exact tick clock, inputs and outputs.
+
+A component is a discrete-time system on a fixed step. Its inputs and outputs are plain
+attributes named as in the signal contract (``../shared/spec/signals.md``); the FMU adapter
+and the runner's direct (no-FMI) backend both map variables onto these attributes by name.
+Subclasses give their inputs default values before calling ``Component.__init__``, which
+applies any ``inputs`` given, validates the parameters and sets the initial state: a component
+that exists is always valid. ``do_step`` checks the requested time against the tick count and calls
+:meth:`update`, which advances exactly one step.
+"""
+
+from abc import ABC, abstractmethod
+from typing import Any, ClassVar
+
+from altfusion.params import check_params
+from altfusion.timegrid import TickClock
+
+DEFAULT_STEP_SIZE = 0.01
+"""Default communication step of every component, s."""
+
+
+class Component(ABC):
+    """Base class of core models; subclasses set ``Params`` and implement ``reset``/``update``."""
+
+    Params: ClassVar[type]
+
+    def __init__(
+        self,
+        params: Any = None,
+        step_size: float = DEFAULT_STEP_SIZE,
+        start_time: float = 0.0,
+        inputs: dict[str, Any] | None = None,
+    ):
+        self.params = params if params is not None else self.Params()
+        check_params(self.params)
+        for name, value in (inputs or {}).items():
+            setattr(self, name, value)
+        self.clock = TickClock(step_size, start_time)
+        self.configure(self.clock)
+        self.reset()
+
+    @property
+    def time(self) -> float:
+        """Current time of this component, s (exact: from the tick count)."""
+        return self.clock.time()
+
+    @property
+    def dt(self) -> float:
+        """Step size, s."""
+        return self.clock.step_size
+
+    def configure(self, clock: TickClock) -> None:
+        """Check parameters against the step and derive step-dependent constants.
+
+        Periods, offsets and latencies must be whole multiples of the step: raise
+        :class:`~altfusion.errors.ParameterError` naming the parameter otherwise.
+        The default has nothing to check.
+        """
+        return None
+
+    @abstractmethod
+    def reset(self) -> None:
+        """Set the initial state and outputs from the parameters (t = start time)."""
+
+    @abstractmethod
+    def update(self) -> None:
+        """Advance one step; ``self.time`` is already the end of the step."""
+
+    def do_step(self, current_time: float, step_size: float) -> None:
+        """Advance from ``current_time`` by ``step_size`` (which must equal the step)."""
+        self.clock.advance(current_time, step_size)
+        self.update()

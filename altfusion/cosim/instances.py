@@ -1,0 +1,288 @@
+"""Component instances the runner steps: an FMU through fmpy, or the core object directly.
+
+Both expose the same small interface (parameters, batched get/set by type, do_step, reset,
+state), so the runner's orchestration is one piece of code and the direct backend gives the
+reference result that the FMU run must reproduce.
+"""
+
+import copy
+import importlib
+import itertools
+import zipfile
+from ctypes import byref
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+from xml.etree import ElementTree as ET
+
+from fmpy import calloc, extract, free, read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import (
+    FMU2Slave,
+    fmi2CallbackAllocateMemoryTYPE,
+    fmi2CallbackFreeMemoryTYPE,
+    fmi2CallbackFunctions,
+    fmi2CallbackLoggerTYPE,
+)
+from fmpy.logging import addLoggerProxy
+
+from altfusion.params import coerce
+from altfusion.version import CORE_VERSION
+
+FMI_TYPES = ("Real", "Integer", "Boolean")
+PY_TYPES = {"Real": float, "Integer": int, "Boolean": bool, "String": str}
+
+
+class CosimError(RuntimeError):
+    """A co-simulation failure, naming the component and what it reported."""
+
+
+@dataclass(frozen=True)
+class Variable:
+    name: str
+    type: str
+    causality: str
+    value_reference: int
+    unit: str | None
+
+
+@dataclass(frozen=True)
+class FmuInfo:
+    """What the runner needs from one FMU file."""
+
+    path: Path
+    model_name: str
+    guid: str
+    core_version: str | None
+    core_class: str | None
+    variables: dict[str, Variable]
+    feedthrough_inputs: frozenset[str]
+    """Inputs that some output depends on directly (ModelStructure dependencies)."""
+
+
+_INFO_CACHE: dict[Path, FmuInfo] = {}
+
+
+def fmu_info(path: Path) -> FmuInfo:
+    """Read (and cache) the modelDescription and our vendor annotation of an FMU."""
+    path = Path(path).resolve()
+    if path in _INFO_CACHE:
+        return _INFO_CACHE[path]
+    md = read_model_description(str(path))
+    with zipfile.ZipFile(path) as archive:
+        root = ET.fromstring(archive.read("modelDescription.xml"))
+    core = root.find("VendorAnnotations/Tool[@name='altfusion']/Core")
+    variables = {
+        v.name: Variable(v.name, v.type, v.causality, v.valueReference, v.unit)
+        for v in md.modelVariables
+    }
+    inputs = {v.name for v in md.modelVariables if v.causality == "input"}
+    feedthrough: set[str] = set()
+    for unknown in md.outputs:
+        deps = unknown.dependencies
+        feedthrough |= inputs if deps is None else {d.name for d in deps}
+    info = FmuInfo(
+        path=path,
+        model_name=md.modelName,
+        guid=md.guid,
+        core_version=core.get("version") if core is not None else md.version,
+        core_class=core.get("class") if core is not None else None,
+        variables=variables,
+        feedthrough_inputs=frozenset(feedthrough & inputs),
+    )
+    _INFO_CACHE[path] = info
+    return info
+
+
+def check_core_version(info: FmuInfo) -> None:
+    """Refuse an FMU built from another core: pythonfmu would run this process's copy."""
+    if info.core_version != CORE_VERSION:
+        raise CosimError(
+            f"{info.path.name} was built from altfusion core {info.core_version}, but this "
+            f"process runs core {CORE_VERSION}; pythonfmu loads only one copy of the core per "
+            f"process, so the FMU would not run its own code. Rebuild: python build_fmu.py"
+        )
+
+
+class _LogRouter:
+    """One FMI logger for the whole process, routing messages by instance name.
+
+    fmpy's logger proxy (which formats the variadic message) keeps a single Python callback
+    per process, so per-instance callbacks would receive each other's messages.
+    """
+
+    def __init__(self):
+        self.queues: dict[str, list[tuple[int, str]]] = {}
+        self.callbacks = fmi2CallbackFunctions()
+        self.callbacks.logger = fmi2CallbackLoggerTYPE(self._on_log)
+        self.callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        self.callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        addLoggerProxy(byref(self.callbacks))
+        self._serial = itertools.count()
+
+    def register(self, name: str) -> tuple[str, list[tuple[int, str]]]:
+        """A unique instance name for ``name`` and the list its messages will go to."""
+        unique = f"{name}#{next(self._serial)}"
+        self.queues[unique] = []
+        return unique, self.queues[unique]
+
+    def _on_log(self, _env, instance, status, _category, message) -> None:
+        queue = self.queues.get(instance.decode("utf-8", "replace"))
+        if queue is not None:
+            queue.append((int(status), message.decode("utf-8", "replace")))
+
+
+_ROUTER: _LogRouter | None = None
+
+
+def _router() -> _LogRouter:
+    global _ROUTER
+    if _ROUTER is None:
+        _ROUTER = _LogRouter()
+    return _ROUTER
+
+
+class FmuInstance:
+    """One FMU instance driven through fmpy's FMU2Slave, with its log messages collected."""
+
+    _extracted: dict[Path, str] = {}
+
+    def __init__(self, name: str, info: FmuInfo):
+        check_core_version(info)
+        self.name, self.info = name, info
+        folder = self._extracted.get(info.path)
+        if folder is None:
+            folder = extract(str(info.path))
+            self._extracted[info.path] = folder
+        router = _router()
+        self.instance_name, self.messages = router.register(name)
+        self.fmu = FMU2Slave(guid=info.guid, unzipDirectory=folder,
+                             modelIdentifier=info.model_name, instanceName=self.instance_name)
+        self.fmu.instantiate(callbacks=router.callbacks, loggingOn=True)
+
+    def errors(self) -> list[str]:
+        """Messages logged at fmi2Error severity or worse since the last call; clears them."""
+        found = [m for s, m in self.messages if s >= 3]
+        self.messages.clear()
+        return found
+
+    def _call(self, what: str, function, *args) -> Any:
+        try:
+            result = function(*args)
+        except FMICallException as error:
+            details = "\n".join(self.errors()) or f"{what} failed: {error}"
+            raise CosimError(f"component '{self.name}': {details}") from None
+        errors = self.errors()
+        if errors:
+            raise CosimError(f"component '{self.name}' ({what}): " + "\n".join(errors))
+        return result
+
+    def initialize(self, parameters: dict[str, Any], step_size: float, start_time: float,
+                   stop_time: float) -> None:
+        values = {**parameters, "step_size": step_size}
+        self._call("setupExperiment", self.fmu.setupExperiment, None, start_time, stop_time)
+        for name, value in values.items():
+            var = self.info.variables.get(name)
+            if var is None or var.causality != "parameter":
+                raise CosimError(f"component '{self.name}' ({self.info.model_name}) has no "
+                                 f"parameter '{name}'")
+            self.set(var.type, [var.value_reference], [PY_TYPES[var.type](value)])
+        self._call("enterInitializationMode", self.fmu.enterInitializationMode)
+
+    def exit_initialization(self) -> None:
+        self._call("exitInitializationMode", self.fmu.exitInitializationMode)
+
+    def get(self, kind: str, vrs: list[int]) -> list[Any]:
+        getter = {"Real": self.fmu.getReal, "Integer": self.fmu.getInteger,
+                  "Boolean": self.fmu.getBoolean}[kind]
+        return self._call(f"get{kind}", getter, vrs)
+
+    def set(self, kind: str, vrs: list[int], values: list[Any]) -> None:
+        setter = {"Real": self.fmu.setReal, "Integer": self.fmu.setInteger,
+                  "Boolean": self.fmu.setBoolean, "String": self.fmu.setString}[kind]
+        self._call(f"set{kind}", setter, vrs, values)
+
+    def do_step(self, time: float, step: float) -> None:
+        self._call(f"doStep(t = {time!r} s, h = {step!r} s)", self.fmu.doStep, time, step)
+
+    def reset(self) -> None:
+        self._call("reset", self.fmu.reset)
+
+    def get_state(self) -> Any:
+        return self._call("getFMUstate", self.fmu.getFMUstate)
+
+    def set_state(self, state: Any) -> None:
+        self._call("setFMUstate", self.fmu.setFMUstate, state)
+
+    def terminate(self) -> None:
+        self._call("terminate", self.fmu.terminate)
+
+    def free(self) -> None:
+        """Free the instance but keep the shared library loaded: unloading pythonfmu's library
+        tears down its embedded-Python state, and loading it again crashes the process."""
+        self.fmu.fmi2FreeInstance(self.fmu.component)
+        _router().queues.pop(self.instance_name, None)
+
+
+class CoreInstance:
+    """The core object behind an FMU, stepped directly in Python (no FMI)."""
+
+    def __init__(self, name: str, info: FmuInfo):
+        if info.core_class is None:
+            raise CosimError(f"{info.path.name} names no altfusion core class")
+        module, qualname = info.core_class.split(":")
+        self.core_class = getattr(importlib.import_module(module), qualname)
+        self.name, self.info = name, info
+        self._by_ref = {v.value_reference: v for v in info.variables.values()}
+        self.core = self.core_class()
+
+    def initialize(self, parameters: dict[str, Any], step_size: float, start_time: float,
+                   stop_time: float) -> None:
+        params = self.core_class.Params()
+        for key, value in parameters.items():
+            try:
+                params = replace(params, **{key: coerce(type(params), key, value)})
+            except KeyError as error:
+                raise CosimError(f"component '{self.name}': {error}") from None
+        self._setup = (params, step_size, start_time)
+        self.exit_initialization()
+
+    def exit_initialization(self) -> None:
+        """Rebuild the core from the parameters and the inputs set so far, as the FMU does."""
+        params, step_size, start_time = self._setup
+        inputs = {name: getattr(self.core, name) for name, v in self.info.variables.items()
+                  if v.causality == "input"}
+        try:
+            self.core = self.core_class(params, step_size=step_size, start_time=start_time,
+                                        inputs=inputs)
+        except Exception as error:
+            raise CosimError(f"component '{self.name}': initialization failed: {error}") from None
+
+    def get(self, kind: str, vrs: list[int]) -> list[Any]:
+        return [getattr(self.core, self._by_ref[vr].name) for vr in vrs]
+
+    def set(self, kind: str, vrs: list[int], values: list[Any]) -> None:
+        for vr, value in zip(vrs, values, strict=True):
+            setattr(self.core, self._by_ref[vr].name, PY_TYPES[kind](value))
+
+    def do_step(self, time: float, step: float) -> None:
+        try:
+            self.core.do_step(time, step)
+        except Exception as error:
+            raise CosimError(f"component '{self.name}': doStep(t = {time!r} s) failed: "
+                             f"{error}") from error
+
+    def reset(self) -> None:
+        self.core = self.core_class()
+
+    def get_state(self) -> Any:
+        return copy.deepcopy(self.core)
+
+    def set_state(self, state: Any) -> None:
+        self.core = copy.deepcopy(state)
+
+    def terminate(self) -> None:
+        pass
+
+    def free(self) -> None:
+        pass

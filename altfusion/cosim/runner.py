@@ -1,0 +1,295 @@
+"""The multi-rate co-simulation runner on fmpy's FMU2Slave.
+
+Timing: a fixed base step; every component has its own step, an integer multiple m of it.
+Time is always computed from integer tick counts (``TickClock``), never accumulated.
+
+Ordering: a component steps over (t_a, t_b] when the base clock reaches t_b. Its inputs come
+from two kinds of connection, told apart by the FMU's ModelStructure output dependencies:
+
+* feedthrough inputs (some output depends on them) take the source's value at t_b, so sources
+  are stepped first: components are ordered upstream-first along these connections, and a
+  cycle of them is an algebraic loop, reported;
+* the other inputs (e.g. the thrust of the vertical dynamics, which only enters its state)
+  take the source's value latched at t_a, the start of the step, and impose no order.
+
+Thus a sensor samples the plant state of the same instant, an estimator fuses the sample of
+that instant, and the loop through the plant is broken where the physics breaks it.
+"""
+
+import graphlib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from altfusion.cosim.instances import (
+    FMI_TYPES,
+    CoreInstance,
+    CosimError,
+    FmuInstance,
+    fmu_info,
+)
+from altfusion.cosim.results import Results
+from altfusion.cosim.system import SystemSpec
+from altfusion.errors import ParameterError
+from altfusion.timegrid import TickClock
+
+__all__ = ["CosimError", "Simulation", "simulate"]
+
+
+@dataclass
+class _Link:
+    """A resolved connection: source output cache slot -> destination input."""
+
+    source: "_Stepped"
+    kind: str
+    slot: int
+    end: str
+
+
+@dataclass
+class _Stepped:
+    """Runtime data of one component."""
+
+    name: str
+    index: int
+    instance: Any
+    ratio: int
+    parameters: dict[str, Any]
+    output_names: dict[str, list[str]] = field(default_factory=dict)
+    output_vrs: dict[str, list[int]] = field(default_factory=dict)
+    outputs: dict[str, list[Any]] = field(default_factory=dict)
+    feedthrough: list[tuple[str, int, _Link]] = field(default_factory=list)
+    delayed: list[tuple[str, int, _Link]] = field(default_factory=list)
+    latched: list[Any] = field(default_factory=list)
+
+    def refresh_outputs(self) -> None:
+        for kind, vrs in self.output_vrs.items():
+            if vrs:
+                self.outputs[kind] = self.instance.get(kind, vrs)
+
+    def value(self, kind: str, slot: int) -> Any:
+        return self.outputs[kind][slot]
+
+    def latch(self) -> None:
+        self.latched = [link.source.value(link.kind, link.slot) for _, _, link in self.delayed]
+
+    def apply_inputs(self) -> None:
+        grouped: dict[str, tuple[list[int], list[Any]]] = {}
+        for (kind, vr, _link), value in zip(self.delayed, self.latched, strict=True):
+            vrs, values = grouped.setdefault(kind, ([], []))
+            vrs.append(vr)
+            values.append(value)
+        for kind, vr, link in self.feedthrough:
+            vrs, values = grouped.setdefault(kind, ([], []))
+            vrs.append(vr)
+            values.append(link.source.value(link.kind, link.slot))
+        for kind, (vrs, values) in grouped.items():
+            self.instance.set(kind, vrs, values)
+
+
+class Simulation:
+    """A system ready to run, repeatedly: instances are created once and reset between runs."""
+
+    def __init__(self, system: SystemSpec, fmu_paths: dict[str, Path], backend: str = "fmu"):
+        if backend not in ("fmu", "core"):
+            raise ValueError(f"backend must be 'fmu' or 'core', not {backend!r}")
+        self.system = system
+        self.backend = backend
+        self.base = TickClock(system.base_step, system.start_time, name="base_step")
+        self._components: list[_Stepped] = []
+        self._by_name: dict[str, _Stepped] = {}
+        self._runs = 0
+        instance_class = FmuInstance if backend == "fmu" else CoreInstance
+        try:
+            for index, spec in enumerate(system.components):
+                info = fmu_info(fmu_paths[spec.fmu])
+                ratio = self._ratio(spec.name, spec.step_size)
+                stepped = _Stepped(spec.name, index, instance_class(spec.name, info), ratio,
+                                   dict(spec.parameters))
+                self._components.append(stepped)
+                self._by_name[spec.name] = stepped
+            self._recorded = self._resolve_recording()
+            self._resolve_connections()
+            self._order = self._step_order()
+        except Exception:
+            self.close()
+            raise
+
+    # ----------------------------------------------------------------- set-up
+    def _ratio(self, name: str, step_size: float) -> int:
+        try:
+            return self.base.ticks_in(step_size, "step_size", allow_zero=False)
+        except ParameterError:
+            raise CosimError(
+                f"component '{name}': step size {step_size!r} s is not a positive integer "
+                f"multiple of the base step {self.system.base_step!r} s"
+            ) from None
+
+    def _variable(self, path: str):
+        component, _, variable = path.partition(".")
+        if component not in self._by_name:
+            raise CosimError(f"'{path}': no component '{component}' in {self.system.name}")
+        stepped = self._by_name[component]
+        var = stepped.instance.info.variables.get(variable)
+        if var is None:
+            raise CosimError(f"'{path}': {stepped.instance.info.model_name} has no variable "
+                             f"'{variable}'")
+        return stepped, var
+
+    def _output_slot(self, path: str) -> tuple[_Stepped, str, int]:
+        stepped, var = self._variable(path)
+        if var.causality != "output":
+            raise CosimError(f"'{path}' is not an output")
+        if var.type not in FMI_TYPES:
+            raise CosimError(f"'{path}': {var.type} signals are not supported")
+        names = stepped.output_names.setdefault(var.type, [])
+        if var.name not in names:
+            names.append(var.name)
+            stepped.output_vrs.setdefault(var.type, []).append(var.value_reference)
+        return stepped, var.type, names.index(var.name)
+
+    def _resolve_recording(self) -> list[tuple[str, _Stepped, str, int, str]]:
+        paths = list(self.system.record)
+        if not paths:
+            paths = [f"{c.name}.{v.name}" for c in self._components
+                     for v in c.instance.info.variables.values()
+                     if v.causality == "output" and v.type in FMI_TYPES]
+        recorded = []
+        for path in paths:
+            stepped, kind, slot = self._output_slot(path)
+            unit = self._variable(path)[1].unit or ""
+            recorded.append((path, stepped, kind, slot, unit))
+        return recorded
+
+    def _resolve_connections(self) -> None:
+        driven: set[str] = set()
+        for connection in self.system.connections:
+            source, kind, slot = self._output_slot(connection.start)
+            target, var = self._variable(connection.end)
+            if var.causality != "input":
+                raise CosimError(f"'{connection.end}' is not an input")
+            if connection.end in driven:
+                raise CosimError(f"input '{connection.end}' is driven by two connections")
+            driven.add(connection.end)
+            if var.type != kind:
+                raise CosimError(f"cannot connect {kind} '{connection.start}' to {var.type} "
+                                 f"'{connection.end}'")
+            link = _Link(source, kind, slot, connection.end)
+            entry = (var.type, var.value_reference, link)
+            if var.name in target.instance.info.feedthrough_inputs:
+                target.feedthrough.append(entry)
+            else:
+                target.delayed.append(entry)
+
+    def _step_order(self) -> list[_Stepped]:
+        graph = graphlib.TopologicalSorter()
+        for component in self._components:
+            graph.add(component.name, *{link.source.name for _, _, link in
+                                        component.feedthrough})
+        try:
+            graph.prepare()
+        except graphlib.CycleError as error:
+            cycle = " -> ".join(error.args[1])
+            raise CosimError(
+                f"algebraic loop in {self.system.name}: {cycle} (each of these outputs depends "
+                f"directly on the next one's; break the loop with a component whose outputs "
+                f"do not depend on its inputs)"
+            ) from None
+        order = []
+        while graph.is_active():
+            ready = sorted(graph.get_ready(), key=lambda name: self._by_name[name].index)
+            order += [self._by_name[name] for name in ready]
+            graph.done(*ready)
+        return order
+
+    # ----------------------------------------------------------------- running
+    def run(self, stop_time: float | None = None,
+            parameters: dict[str, Any] | None = None) -> Results:
+        """Simulate from the start time to ``stop_time`` (default: the system's)."""
+        system = self.system
+        stop = system.stop_time if stop_time is None else stop_time
+        steps = self.base.ticks_in(stop - system.start_time, "stop_time")
+        interval = system.output_interval or system.base_step
+        every = self.base.ticks_in(interval, "output_interval", allow_zero=False)
+        overrides = self._split_parameters(parameters or {})
+        if self._runs:
+            for component in self._components:
+                component.instance.reset()
+        self._runs += 1
+        self._initialize(stop, overrides)
+        rows = steps // every + 1
+        data = np.empty((rows, len(self._recorded)))
+        times = np.empty(rows)
+        self._record(data, times, 0, 0)
+        for n in range(steps):
+            for component in self._components:
+                if n % component.ratio == 0:
+                    component.latch()
+            end = n + 1
+            for component in self._order:
+                ratio = component.ratio
+                if end % ratio:
+                    continue
+                component.apply_inputs()
+                t_start = self.base.time(end - ratio)
+                component.instance.do_step(t_start, self.base.time(end) - t_start)
+                component.refresh_outputs()
+            if end % every == 0:
+                self._record(data, times, end // every, end)
+        for component in self._components:
+            component.instance.terminate()
+        columns = {path: data[:, i] for i, (path, *_rest) in enumerate(self._recorded)}
+        units = {path: unit for path, *_rest, unit in self._recorded}
+        return Results(times, columns, units)
+
+    def _split_parameters(self, overrides: dict[str, Any]) -> dict[str, dict[str, Any]]:
+        split: dict[str, dict[str, Any]] = {}
+        for path, value in overrides.items():
+            component, _, name = path.partition(".")
+            if component not in self._by_name:
+                raise CosimError(f"parameter '{path}': no component '{component}'")
+            split.setdefault(component, {})[name] = value
+        return split
+
+    def _initialize(self, stop: float, overrides: dict[str, dict[str, Any]]) -> None:
+        start = self.system.start_time
+        for component in self._components:
+            parameters = {**component.parameters, **overrides.get(component.name, {})}
+            step = self.base.step_size * component.ratio
+            component.instance.initialize(parameters, step, start, stop)
+        for component in self._components:
+            component.refresh_outputs()
+        # Upstream first: each component ends initialization with its inputs set from the
+        # final initial outputs of its feedthrough sources.
+        for component in self._order:
+            component.latch()
+            component.apply_inputs()
+            component.instance.exit_initialization()
+            component.refresh_outputs()
+        for component in self._components:
+            component.latch()
+
+    def _record(self, data: np.ndarray, times: np.ndarray, row: int, tick: int) -> None:
+        times[row] = self.base.time(tick)
+        data[row] = [stepped.value(kind, slot) for _, stepped, kind, slot, _ in self._recorded]
+
+    def close(self) -> None:
+        """Free every FMU instance."""
+        for component in self._components:
+            component.instance.free()
+        self._components.clear()
+
+    def __enter__(self) -> "Simulation":
+        return self
+
+    def __exit__(self, *_exc) -> None:
+        self.close()
+
+
+def simulate(system: SystemSpec, fmu_paths: dict[str, Path], backend: str = "fmu",
+             stop_time: float | None = None, parameters: dict[str, Any] | None = None) -> Results:
+    """Build, run once and close a :class:`Simulation`."""
+    with Simulation(system, fmu_paths, backend) as simulation:
+        return simulation.run(stop_time, parameters)

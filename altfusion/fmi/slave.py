@@ -1,0 +1,324 @@
+"""The adapter base of every FMU: units, state, logging, errors and modelDescription extras.
+
+A slave script in ``fmu_src/`` subclasses :class:`CoreSlave`, names its core class and declares
+its inputs and outputs; the parameters are the fields of the core's ``Params`` dataclass (with
+their units, descriptions and bounds) plus ``step_size``. Inputs, outputs and parameters map by
+name onto the core object, which is rebuilt from the parameters when initialization ends.
+
+FMI behaviour that pythonfmu 0.7.0 leaves to us:
+
+* No exception escapes an FMI call. It is logged with its traceback at fmi2Error severity
+  (``%`` escaped, since the host formats the message). ``doStep`` then returns fmi2Discard;
+  pythonfmu maps any escaping exception to fmi2Fatal and gives Python code no other way to
+  return an error status, so a failed initialization (a bad parameter) is logged and every
+  later ``doStep`` returns fmi2Discard with the reason.
+* The FMU state is the whole core object (filter state, random generators, tick clock), deep
+  copied on get and set and pickled for serialization.
+* pythonfmu 0.7.0 releases a reference it does not own: each instantiation ends with
+  ``Py_DECREF`` of the slave module's ``__dict__`` (a borrowed reference), so the dict is freed
+  while the module still uses it and the host crashes later, typically in the garbage
+  collector. Each instantiation first re-executes the slave script, which re-creates the slave
+  class; ``__init_subclass__`` therefore pins one extra reference to the module's dict per
+  execution, which balances the stray release.
+* The modelDescription gets UnitDefinitions, per-variable units and bounds, output dependencies,
+  InitialUnknowns and a VendorAnnotation with the core version and core class.
+"""
+
+import contextlib
+import copy
+import pickle
+import sys
+import traceback
+import uuid
+from dataclasses import replace
+from typing import Any, ClassVar
+from xml.etree.ElementTree import Element, SubElement
+
+from pythonfmu import Boolean, Fmi2Causality, Fmi2Slave, Fmi2Variability, Integer, Real, String
+from pythonfmu.default_experiment import DefaultExperiment
+from pythonfmu.enums import Fmi2Status
+
+from altfusion.component import DEFAULT_STEP_SIZE, Component
+from altfusion.fmi.variables import Input, Output
+from altfusion.params import ParamInfo, coerce, param_infos
+from altfusion.units import BASE_UNITS
+from altfusion.version import CORE_VERSION
+
+VENDOR_TOOL = "altfusion"
+
+STEP_SIZE = ParamInfo(
+    name="step_size",
+    type=float,
+    default=DEFAULT_STEP_SIZE,
+    unit="s",
+    description="Communication step size of this instance; every doStep must use exactly it",
+    min=None,
+    max=None,
+    positive=True,
+)
+
+_FMI_TYPES = {float: Real, int: Integer, bool: Boolean, str: String}
+
+_PINNED_MODULE_DICTS: list[dict[str, Any]] = []
+"""One reference per execution of a slave script (see the module docstring)."""
+
+
+def unit_definitions(units: set[str]) -> Element:
+    """A <UnitDefinitions> element for the given unit names (KeyError if one is unknown)."""
+    element = Element("UnitDefinitions")
+    for name in sorted(units):
+        unit = SubElement(element, "Unit", {"name": name})
+        SubElement(unit, "BaseUnit", {k: str(v) for k, v in BASE_UNITS[name].items()})
+    return element
+
+
+class CoreSlave(Fmi2Slave):
+    """pythonfmu slave that exposes one core :class:`~altfusion.component.Component`."""
+
+    core_class: ClassVar[type[Component]]
+    variables: ClassVar[tuple[Input | Output, ...]] = ()
+    author = "altfusion contributors"
+    license = "MIT"
+    version = CORE_VERSION
+
+    def __init_subclass__(cls, **kwargs: Any):
+        super().__init_subclass__(**kwargs)
+        module = sys.modules.get(cls.__module__)
+        if module is not None:
+            _PINNED_MODULE_DICTS.append(vars(module))
+
+    def __init__(self, **kwargs: Any):
+        super().__init__(**kwargs)
+        self.modelName = type(self).__name__
+        self.description = " ".join((type(self).__doc__ or "").strip().split("\n\n")[0].split())
+        self.guid = uuid.uuid5(uuid.NAMESPACE_URL, f"altfusion/{self.modelName}/{CORE_VERSION}")
+        self.default_experiment = DefaultExperiment(
+            start_time=0.0, stop_time=None, step_size=DEFAULT_STEP_SIZE
+        )
+        self._params = self.core_class.Params()
+        self._step_size = DEFAULT_STEP_SIZE
+        self._start_time = 0.0
+        self._failure: str | None = None
+        self.core = self.core_class()
+        for info in self.parameter_infos():
+            self._register(info.name, info.type, Fmi2Causality.parameter, Fmi2Variability.fixed,
+                           info.description, getter=self._param_getter(info.name),
+                           setter=self._param_setter(info.name))
+        for var in self.variables:
+            causality = Fmi2Causality.input if isinstance(var, Input) else Fmi2Causality.output
+            continuous = var.type is float
+            variability = Fmi2Variability.continuous if continuous else Fmi2Variability.discrete
+            setter = self._input_setter(var) if isinstance(var, Input) else None
+            self._register(var.name, var.type, causality, variability, var.description,
+                           getter=self._core_getter(var.name), setter=setter)
+
+    # ----------------------------------------------------------------- declarations
+    @classmethod
+    def parameter_infos(cls) -> list[ParamInfo]:
+        """The FMU's parameters: the core's Params fields, then ``step_size``."""
+        return [*param_infos(cls.core_class.Params), STEP_SIZE]
+
+    def _register(self, name, value_type, causality, variability, description, getter, setter):
+        fmi_type = _FMI_TYPES[value_type]
+        self.register_variable(
+            fmi_type(name, causality=causality, variability=variability, description=description,
+                     getter=getter, setter=setter)
+        )
+
+    def _param_getter(self, name: str):
+        if name == STEP_SIZE.name:
+            return lambda: self._step_size
+        return lambda: getattr(self._params, name)
+
+    def _param_setter(self, name: str):
+        def set_value(value: Any) -> None:
+            if name == STEP_SIZE.name:
+                self._step_size = float(value)
+            else:
+                self._params = replace(self._params, **{name: coerce(type(self._params), name,
+                                                                     value)})
+        return set_value
+
+    def _core_getter(self, name: str):
+        return lambda: getattr(self.core, name)
+
+    def _input_setter(self, var: Input):
+        return lambda value: setattr(self.core, var.name, var.type(value))
+
+    # ----------------------------------------------------------------- logging
+    def _log(self, status: Fmi2Status, message: str) -> None:
+        """Log to the host; '%' is escaped because hosts format the message printf-style."""
+        self.log(message.replace("%", "%%"), status)
+
+    def _log_exception(self, where: str) -> None:
+        error = sys.exc_info()[1]
+        self._log(Fmi2Status.error, f"{where} failed: {type(error).__name__}: {error}\n"
+                                    f"{traceback.format_exc()}")
+
+    # ----------------------------------------------------------------- life cycle
+    def _rebuild_core(self) -> None:
+        """Construct the core from the current parameters, keeping the inputs already set."""
+        inputs = {v.name: getattr(self.core, v.name) for v in self.variables
+                  if isinstance(v, Input)}
+        self.core = self.core_class(self._params, step_size=self._step_size,
+                                    start_time=self._start_time, inputs=inputs)
+
+    def setup_experiment(self, start_time: float, stop_time=None, tolerance=None) -> None:
+        self._start_time = float(start_time)
+
+    def enter_initialization_mode(self) -> None:
+        # Errors are reported when initialization ends, once every parameter is set.
+        with contextlib.suppress(Exception):
+            self._rebuild_core()
+
+    def exit_initialization_mode(self) -> None:
+        try:
+            self._rebuild_core()
+            self._failure = None
+        except Exception as error:
+            self._failure = f"initialization failed: {error}"
+            self._log(Fmi2Status.error, self._failure)
+
+    def do_step(self, current_time: float, step_size: float) -> bool:
+        if self._failure is not None:
+            self._log(Fmi2Status.error, f"cannot step, {self._failure}")
+            return False
+        try:
+            self.core.do_step(current_time, step_size)
+        except Exception:
+            self._log_exception(f"doStep(t = {current_time!r} s, h = {step_size!r} s)")
+            return False
+        return True
+
+    def terminate(self) -> None:
+        pass
+
+    # ----------------------------------------------------------------- value access
+    def _guarded(self, method, label, vrs, *args):
+        try:
+            return method(vrs, *args)
+        except Exception:
+            self._log_exception(label)
+            return None
+
+    def get_real(self, vrs):
+        values = self._guarded(super().get_real, "getReal", vrs)
+        return [float("nan")] * len(vrs) if values is None else values
+
+    def get_integer(self, vrs):
+        values = self._guarded(super().get_integer, "getInteger", vrs)
+        return [0] * len(vrs) if values is None else values
+
+    def get_boolean(self, vrs):
+        values = self._guarded(super().get_boolean, "getBoolean", vrs)
+        return [False] * len(vrs) if values is None else values
+
+    def get_string(self, vrs):
+        values = self._guarded(super().get_string, "getString", vrs)
+        return [""] * len(vrs) if values is None else values
+
+    def set_real(self, vrs, values):
+        self._guarded(super().set_real, "setReal", vrs, values)
+
+    def set_integer(self, vrs, values):
+        self._guarded(super().set_integer, "setInteger", vrs, values)
+
+    def set_boolean(self, vrs, values):
+        self._guarded(super().set_boolean, "setBoolean", vrs, values)
+
+    def set_string(self, vrs, values):
+        self._guarded(super().set_string, "setString", vrs, values)
+
+    # ----------------------------------------------------------------- FMU state
+    def _get_fmu_state(self) -> dict[str, Any]:
+        try:
+            return copy.deepcopy({
+                "core": self.core, "params": self._params, "step_size": self._step_size,
+                "start_time": self._start_time, "failure": self._failure,
+            })
+        except Exception:
+            self._log_exception("getFMUstate")
+            return {}
+
+    def _set_fmu_state(self, state: dict[str, Any]) -> None:
+        try:
+            restored = copy.deepcopy(state)
+            self.core = restored["core"]
+            self._params = restored["params"]
+            self._step_size = restored["step_size"]
+            self._start_time = restored["start_time"]
+            self._failure = restored["failure"]
+        except Exception:
+            self._log_exception("setFMUstate")
+
+    @staticmethod
+    def _fmu_state_to_bytes(state: dict[str, Any]) -> bytes:
+        return pickle.dumps(state, protocol=pickle.HIGHEST_PROTOCOL)
+
+    @staticmethod
+    def _fmu_state_from_bytes(state: bytes) -> dict[str, Any]:
+        return pickle.loads(state)
+
+    # ----------------------------------------------------------------- modelDescription
+    def to_xml(self, model_options: dict[str, str] | None = None) -> Element:
+        root = super().to_xml(model_options or {})
+        specs = self._declared_units_and_bounds()
+        units = {unit for unit, _, _ in specs.values() if unit}
+        children = list(root)
+        after_cosim = next(i for i, c in enumerate(children) if c.tag == "CoSimulation") + 1
+        root.insert(after_cosim, unit_definitions(units))
+        vendor = Element("VendorAnnotations")
+        tool = SubElement(vendor, "Tool", {"name": VENDOR_TOOL})
+        core = self.core_class
+        SubElement(tool, "Core", {"version": CORE_VERSION,
+                                  "class": f"{core.__module__}:{core.__qualname__}"})
+        model_variables = root.find("ModelVariables")
+        root.insert(list(root).index(model_variables), vendor)
+        index_of: dict[str, int] = {}
+        for index, scalar in enumerate(model_variables, start=1):
+            name = scalar.get("name")
+            index_of[name] = index
+            unit, low, high = specs.get(name, (None, None, None))
+            real = scalar.find("Real")
+            if real is not None and real.get("start") is not None:
+                # pythonfmu writes 16 digits, which does not round-trip (9.80665 -> ...99999)
+                value = self.get_real([int(scalar.get("valueReference"))])[0]
+                real.set("start", repr(value))
+            if real is not None:
+                for key, value in (("unit", unit), ("min", low), ("max", high)):
+                    if value is not None:
+                        real.set(key, value if key == "unit" else f"{value:.16g}")
+        root.remove(root.find("ModelStructure"))
+        structure = SubElement(root, "ModelStructure")
+        self._write_model_structure(structure, index_of)
+        return root
+
+    def _declared_units_and_bounds(self) -> dict[str, tuple[str | None, Any, Any]]:
+        specs = {}
+        for info in self.parameter_infos():
+            if info.type is float:
+                low = info.min
+                specs[info.name] = (info.unit, low, info.max)
+        for var in self.variables:
+            if var.type is float:
+                specs[var.name] = (var.unit, var.min, var.max)
+        return specs
+
+    def _write_model_structure(self, structure: Element, index_of: dict[str, int]) -> None:
+        input_names = [v.name for v in self.variables if isinstance(v, Input)]
+        outputs = [v for v in self.variables if isinstance(v, Output)]
+        if not outputs:
+            return
+        outputs_node = SubElement(structure, "Outputs")
+        for var in outputs:
+            depends = input_names if var.depends_on is None else list(var.depends_on)
+            unknown = set(depends) - set(input_names)
+            if unknown:
+                raise ValueError(f"output {var.name} depends on unknown inputs {unknown}")
+            SubElement(outputs_node, "Unknown", {
+                "index": str(index_of[var.name]),
+                "dependencies": " ".join(str(index_of[n]) for n in depends),
+            })
+        initial = SubElement(structure, "InitialUnknowns")
+        for var in outputs:
+            SubElement(initial, "Unknown", {"index": str(index_of[var.name])})

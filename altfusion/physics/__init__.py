@@ -1,0 +1,1 @@
+"""Plant models: the atmosphere, the vehicle's vertical dynamics and its flight controller."""

@@ -1,0 +1,48 @@
+"""The barometric height formula of a constant-lapse-rate atmosphere and its inverse.
+
+Seed 000 eq. (1) (with the gas constant restored, see NOTES.md), seed 001 eq. (2) and
+seed 002 eq. (1) are all this formula with a different reference point: the reference
+(H0, T0, P0) is sea level for an atmosphere model and the launch site for a barometer's
+calibration. Γ (``lapse_rate``) is dT/dh, negative in the troposphere.
+"""
+
+import math
+
+from altfusion.constants import G0, R_AIR
+
+
+def temperature_at(h: float, T_ref: float, lapse_rate: float, h_ref: float = 0.0) -> float:
+    """Air temperature at height h, K: T = T_ref + Γ (h - h_ref)."""
+    return T_ref + lapse_rate * (h - h_ref)
+
+
+def pressure_at(
+    h: float,
+    p_ref: float,
+    T_ref: float,
+    lapse_rate: float,
+    h_ref: float = 0.0,
+    gravity: float = G0,
+    gas_constant: float = R_AIR,
+) -> float:
+    """Static pressure at height h, Pa, for a constant lapse rate (hydrostatic, ideal gas)."""
+    if abs(lapse_rate) < 1e-12:
+        return p_ref * math.exp(-gravity * (h - h_ref) / (gas_constant * T_ref))
+    T = temperature_at(h, T_ref, lapse_rate, h_ref)
+    return p_ref * (T / T_ref) ** (-gravity / (lapse_rate * gas_constant))
+
+
+def height_from_pressure(
+    p: float,
+    p_ref: float,
+    T_ref: float,
+    lapse_rate: float,
+    h_ref: float = 0.0,
+    gravity: float = G0,
+    gas_constant: float = R_AIR,
+) -> float:
+    """Barometric height, m: h = h_ref + (T_ref/Γ)[(p/p_ref)^(-Γ R/g) - 1] (seed 000 eq. 1)."""
+    if abs(lapse_rate) < 1e-12:
+        return h_ref - gas_constant * T_ref / gravity * math.log(p / p_ref)
+    exponent = -lapse_rate * gas_constant / gravity
+    return h_ref + T_ref / lapse_rate * ((p / p_ref) ** exponent - 1.0)

@@ -1,0 +1,93 @@
+"""Point-mass vertical motion of a UAV: thrust, gravity and quadratic drag.
+
+    dh/dt  = vz
+    dvz/dt = (thrust - m g - c vz |vz|) / m
+
+The thrust input is held over each communication step (zero-order hold) and the state is
+integrated with classical RK4 on fixed internal sub-steps no longer than ``max_substep``, so the
+result is accurate for any communication step. The vehicle rests on the ground at ``ground_h``
+and cannot sink below it. Outputs are the state at the end of the step; ``az`` is the
+acceleration at that instant under the thrust held over the step, so no output depends on the
+thrust value set for the next step (no direct feedthrough).
+"""
+
+import math
+from dataclasses import dataclass
+
+from altfusion.component import Component
+from altfusion.constants import G0
+from altfusion.errors import ParameterError
+from altfusion.params import param
+from altfusion.timegrid import TickClock
+
+
+@dataclass(frozen=True)
+class VerticalDynamicsParams:
+    mass: float = param(1.5, "kg", "Vehicle mass", positive=True)
+    drag_coefficient: float = param(
+        0.05, "kg/m", "Quadratic drag coefficient c: drag force = -c vz |vz|", min=0.0
+    )
+    h0: float = param(0.0, "m", "Initial altitude (MSL)")
+    vz0: float = param(0.0, "m/s", "Initial vertical speed, positive up")
+    ground_h: float = param(0.0, "m", "Ground height (MSL) the vehicle rests on")
+    gravity: float = param(G0, "m/s2", "Gravitational acceleration", positive=True)
+    max_substep: float = param(
+        0.001, "s", "Longest internal RK4 sub-step", positive=True, max=1.0
+    )
+
+
+class VerticalDynamics(Component):
+    """Vertical channel of the vehicle; input ``thrust``, outputs ``h``, ``vz``, ``az``."""
+
+    Params = VerticalDynamicsParams
+
+    def __init__(self, params: VerticalDynamicsParams | None = None, **kwargs):
+        self.thrust = 0.0
+        super().__init__(params, **kwargs)
+
+    def configure(self, clock: TickClock) -> None:
+        p = self.params
+        if p.h0 < p.ground_h:
+            raise ParameterError("h0", p.h0, f"is below ground_h = {p.ground_h}")
+        self._substeps = max(1, math.ceil(clock.step_size / p.max_substep - 1e-9))
+        self._substep = clock.step_size / self._substeps
+
+    def reset(self) -> None:
+        p = self.params
+        self.h = p.h0
+        self.vz = p.vz0
+        self.az = self.acceleration(self.vz, self.thrust)
+        self._settle_on_ground()
+
+    def acceleration(self, vz: float, thrust: float) -> float:
+        """dvz/dt for a given vertical speed and thrust, m/s²."""
+        p = self.params
+        return (thrust - p.mass * p.gravity - p.drag_coefficient * vz * abs(vz)) / p.mass
+
+    def update(self) -> None:
+        thrust = self.thrust
+        if not math.isfinite(thrust):
+            raise ValueError(f"input thrust = {thrust!r} is not finite")
+        h, vz, dt = self.h, self.vz, self._substep
+        accel = self.acceleration
+        for _ in range(self._substeps):
+            # Classical RK4 on (h, vz) with the thrust held constant.
+            a1 = accel(vz, thrust)
+            v2 = vz + 0.5 * dt * a1
+            a2 = accel(v2, thrust)
+            v3 = vz + 0.5 * dt * a2
+            a3 = accel(v3, thrust)
+            v4 = vz + dt * a3
+            a4 = accel(v4, thrust)
+            h += dt / 6.0 * (vz + 2.0 * v2 + 2.0 * v3 + v4)
+            vz += dt / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
+            if h <= self.params.ground_h and vz <= 0.0:
+                h, vz = self.params.ground_h, 0.0
+        self.h, self.vz = h, vz
+        self.az = accel(vz, thrust)
+        self._settle_on_ground()
+
+    def _settle_on_ground(self) -> None:
+        """On the ground with a net downward force the vehicle rests: vz = az = 0."""
+        if self.h <= self.params.ground_h and self.vz <= 0.0 and self.az <= 0.0:
+            self.h, self.vz, self.az = self.params.ground_h, 0.0, 0.0

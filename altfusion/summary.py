@@ -1,0 +1,32 @@
+"""Text summaries of a run: error metrics and the range of each recorded signal."""
+
+import numpy as np
+
+from altfusion.cosim.results import Results
+from altfusion.cosim.system import Metric
+
+
+def metric_rows(results: Results, metrics: tuple[Metric, ...]) -> list[tuple[str, float, ...]]:
+    """(name, RMS, mean, max |error|) of estimate - truth for each metric."""
+    rows = []
+    for metric in metrics:
+        error = results[metric.estimate] - results[metric.truth]
+        rows.append((metric.name, float(np.sqrt(np.mean(error**2))), float(np.mean(error)),
+                     float(np.max(np.abs(error)))))
+    return rows
+
+
+def format_summary(results: Results, metrics: tuple[Metric, ...]) -> str:
+    """A short plain-text table of the metrics and the recorded signals."""
+    lines = []
+    rows = metric_rows(results, metrics)
+    if rows:
+        lines.append(f"{'error metric':<34}{'RMS':>12}{'mean':>12}{'max |e|':>12}")
+        for name, rms, mean, worst in rows:
+            lines.append(f"{name:<34}{rms:12.4g}{mean:12.4g}{worst:12.4g}")
+        lines.append("")
+    lines.append(f"{'signal':<34}{'final':>12}{'min':>12}{'max':>12}")
+    for name, values in results.columns.items():
+        label = results.header(name)
+        lines.append(f"{label:<34}{values[-1]:12.5g}{values.min():12.5g}{values.max():12.5g}")
+    return "\n".join(lines)

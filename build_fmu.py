@@ -1,0 +1,122 @@
+"""Build every FMU in fmu_src/ into models/<Name>.fmu and every catalog system into
+models/<name>.ssp; validate them; regenerate the generated documentation.
+
+    python build_fmu.py            build what is missing or older than its sources
+    python build_fmu.py --force    rebuild everything
+    python build_fmu.py --check    exit 1 if a built FMU is missing or older than its sources
+
+Every FMU bundles the ``altfusion`` package. Each FMU is validated with fmpy's validator
+and each SSP against the SSP 1.0 schema; any problem fails the build.
+"""
+
+import argparse
+import sys
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+FMU_SRC = HERE / "fmu_src"
+MODELS = HERE / "models"
+CORE = HERE / "altfusion"
+DOCS = HERE / "docs"
+
+
+def slave_scripts() -> list[Path]:
+    return sorted(FMU_SRC.glob("*_slave.py"))
+
+
+def model_name(script: Path) -> str:
+    """The FMU's model name: the slave class defined in the script."""
+    from pythonfmu.builder import get_model_class
+
+    if str(script.parent) not in sys.path:
+        sys.path.insert(0, str(script.parent))
+    return get_model_class(script).__name__
+
+
+def sources_mtime(script: Path) -> float:
+    core = [p for p in CORE.rglob("*.py") if "__pycache__" not in p.parts]
+    return max(p.stat().st_mtime for p in [script, Path(__file__), *core])
+
+
+def stale(script: Path, fmu: Path) -> bool:
+    return not fmu.exists() or fmu.stat().st_mtime < sources_mtime(script)
+
+
+def build_fmu(script: Path) -> Path:
+    from pythonfmu.builder import FmuBuilder
+
+    return FmuBuilder.build_FMU(
+        script, dest=MODELS, project_files=[CORE],
+        canGetAndSetFMUstate=True, canSerializeFMUstate=True,
+        canHandleVariableCommunicationStepSize=False,
+    )
+
+
+def validate_fmu(fmu: Path) -> list[str]:
+    from fmpy.validation import validate_fmu as fmpy_validate
+
+    return fmpy_validate(str(fmu))
+
+
+def build_systems(fmu_paths: dict[str, Path]) -> list[Path]:
+    from fmpy.ssp.ssd import read_ssd
+
+    from altfusion.cosim.ssp import write_ssp
+    from altfusion.systems import SYSTEMS
+
+    written = []
+    for name, make in SYSTEMS.items():
+        path = write_ssp(make(), fmu_paths, MODELS / f"{name}.ssp")
+        read_ssd(str(path), validate=True)
+        written.append(path)
+    return written
+
+
+def write_if_changed(path: Path, text: str) -> None:
+    if not path.exists() or path.read_text() != text:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(text)
+        print(f"wrote {path.relative_to(HERE)}")
+
+
+def build_docs(fmu_paths: dict[str, Path]) -> None:
+    from altfusion.docs import fmu_reference
+    from altfusion.physics.controller_design import design, report
+
+    write_if_changed(DOCS / "fmu_reference.md", fmu_reference(sorted(fmu_paths.values())))
+    write_if_changed(DOCS / "controller_design.md", report(design()))
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--check", action="store_true",
+                        help="exit 1 if an FMU is missing or older than its sources")
+    parser.add_argument("--force", action="store_true", help="rebuild every FMU")
+    args = parser.parse_args(argv)
+    scripts = slave_scripts()
+    targets = {script: MODELS / f"{model_name(script)}.fmu" for script in scripts}
+    if args.check:
+        outdated = [fmu.name for script, fmu in targets.items() if stale(script, fmu)]
+        for name in outdated:
+            print(f"out of date: models/{name}")
+        return 1 if outdated else 0
+    MODELS.mkdir(exist_ok=True)
+    problems = []
+    for script, fmu in targets.items():
+        if args.force or stale(script, fmu):
+            print(f"building models/{fmu.name}")
+            build_fmu(script)
+        problems += [f"{fmu.name}: {p}" for p in validate_fmu(fmu)]
+    if problems:
+        print("\n".join(problems), file=sys.stderr)
+        return 1
+    fmu_paths = {fmu.stem: fmu for fmu in targets.values()}
+    for path in build_systems(fmu_paths):
+        print(f"wrote models/{path.name}")
+    build_docs(fmu_paths)
+    print(f"{len(targets)} FMUs valid, systems written")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,63 @@
+"""VerticalDynamics against closed-form solutions."""
+
+import math
+
+import pytest
+
+from altfusion.physics.vertical_dynamics import VerticalDynamics, VerticalDynamicsParams
+
+
+def fly(model: VerticalDynamics, thrust: float, duration: float) -> VerticalDynamics:
+    steps = round(duration / model.dt)
+    for n in range(steps):
+        model.thrust = thrust
+        model.do_step(model.clock.time(n), model.dt)
+    return model
+
+
+@pytest.mark.parametrize("step", [0.001, 0.01, 0.2, 1.0])
+def test_constant_thrust_without_drag_is_a_parabola(step):
+    params = VerticalDynamicsParams(mass=2.0, drag_coefficient=0.0, h0=100.0, vz0=3.0)
+    thrust = 2.0 * (9.80665 + 0.5)  # net acceleration +0.5 m/s²
+    model = fly(VerticalDynamics(params, step_size=step), thrust, 20.0)
+    assert model.h == pytest.approx(100.0 + 3.0 * 20.0 + 0.5 * 0.5 * 20.0**2, abs=1e-9)
+    assert model.vz == pytest.approx(3.0 + 0.5 * 20.0, abs=1e-11)
+    assert model.az == pytest.approx(0.5, abs=1e-12)
+
+
+@pytest.mark.parametrize("step", [0.01, 0.1, 0.5])
+def test_free_fall_with_quadratic_drag_follows_the_tanh_solution(step):
+    m, c, g = 1.5, 0.05, 9.80665
+    params = VerticalDynamicsParams(mass=m, drag_coefficient=c, h0=5000.0)
+    model = fly(VerticalDynamics(params, step_size=step), 0.0, 30.0)
+    v_terminal = math.sqrt(m * g / c)
+    t = 30.0
+    vz = -v_terminal * math.tanh(g * t / v_terminal)
+    h = 5000.0 - v_terminal**2 / g * math.log(math.cosh(g * t / v_terminal))
+    # RK4 at 1 ms sub-steps: global error O(1e-12) per unit; 1e-8 m is a loose bound.
+    assert model.vz == pytest.approx(vz, abs=1e-9)
+    assert model.h == pytest.approx(h, abs=1e-8)
+
+
+def test_results_do_not_depend_on_the_communication_step():
+    params = VerticalDynamicsParams(h0=10.0)
+    fine = fly(VerticalDynamics(params, step_size=0.001), 20.0, 6.0)
+    coarse = fly(VerticalDynamics(params, step_size=0.5), 20.0, 6.0)
+    assert coarse.h == pytest.approx(fine.h, abs=1e-10)
+
+
+def test_vehicle_rests_on_the_ground_without_enough_thrust():
+    model = fly(VerticalDynamics(VerticalDynamicsParams(h0=0.0)), 5.0, 2.0)
+    assert (model.h, model.vz, model.az) == (0.0, 0.0, 0.0)
+
+
+def test_vehicle_lands_and_stays_down():
+    model = fly(VerticalDynamics(VerticalDynamicsParams(h0=2.0)), 0.0, 5.0)
+    assert model.h == 0.0 and model.vz == 0.0
+
+
+def test_non_finite_thrust_is_an_error_not_a_nan():
+    model = VerticalDynamics()
+    model.thrust = float("nan")
+    with pytest.raises(ValueError, match="thrust = nan"):
+        model.do_step(0.0, 0.01)
