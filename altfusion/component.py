@@ -18,6 +18,9 @@ from altfusion.timegrid import TickClock
 DEFAULT_STEP_SIZE = 0.01
 """Default communication step of every component, s."""
 
+MAX_PENDING_NOTES = 1000
+"""Notes kept until a host drains them; older ones are dropped and counted."""
+
 
 class Component(ABC):
     """Base class of core models; subclasses set ``Params`` and implement ``reset``/``update``."""
@@ -36,6 +39,8 @@ class Component(ABC):
         for name, value in (inputs or {}).items():
             setattr(self, name, value)
         self.clock = TickClock(step_size, start_time)
+        self._notes: list[str] = []
+        self.dropped_notes = 0
         self.configure(self.clock)
         self.reset()
 
@@ -70,3 +75,15 @@ class Component(ABC):
         """Advance from ``current_time`` by ``step_size`` (which must equal the step)."""
         self.clock.advance(current_time, step_size)
         self.update()
+
+    def note(self, message: str) -> None:
+        """Record a warning (an ignored sample, a rejected outlier...) for the host to log."""
+        if len(self._notes) >= MAX_PENDING_NOTES:
+            self._notes.pop(0)
+            self.dropped_notes += 1
+        self._notes.append(f"t = {self.time!r} s: {message}")
+
+    def take_notes(self) -> list[str]:
+        """The notes recorded since the last call (the FMU adapter logs them as warnings)."""
+        notes, self._notes = self._notes, []
+        return notes

@@ -62,6 +62,16 @@ class FmuInfo:
 
 _INFO_CACHE: dict[Path, FmuInfo] = {}
 
+MAX_WARNINGS = 10_000
+"""Warnings kept per instance and run; later ones are counted, not kept."""
+
+
+def _keep_warnings(kept: list[str], new: list[str]) -> None:
+    room = MAX_WARNINGS - len(kept)
+    kept.extend(new[:max(room, 0)])
+    if len(new) > room:
+        kept[-1] = f"... {len(new) - room} more warnings not kept"
+
 
 def fmu_info(path: Path) -> FmuInfo:
     """Read (and cache) the modelDescription and our vendor annotation of an FMU."""
@@ -156,13 +166,17 @@ class FmuInstance:
             self._extracted[info.path] = folder
         router = _router()
         self.instance_name, self.messages = router.register(name)
+        self.warnings: list[str] = []
         self.fmu = FMU2Slave(guid=info.guid, unzipDirectory=folder,
                              modelIdentifier=info.model_name, instanceName=self.instance_name)
         self.fmu.instantiate(callbacks=router.callbacks, loggingOn=True)
 
     def errors(self) -> list[str]:
-        """Messages logged at fmi2Error severity or worse since the last call; clears them."""
+        """Messages logged at fmi2Error severity or worse since the last call; clears them.
+
+        Warnings move to :attr:`warnings` (bounded to ``MAX_WARNINGS``)."""
         found = [m for s, m in self.messages if s >= 3]
+        _keep_warnings(self.warnings, [m for s, m in self.messages if 0 < s < 3])
         self.messages.clear()
         return found
 
@@ -219,7 +233,12 @@ class FmuInstance:
 
     def free(self) -> None:
         """Free the instance but keep the shared library loaded: unloading pythonfmu's library
-        tears down its embedded-Python state, and loading it again crashes the process."""
+        tears down its embedded-Python state, and loading it again crashes the process.
+
+        pythonfmu keeps the strings of the last logged messages until its next call and would
+        release them without the GIL when the instance is freed (heap corruption at exit): an
+        empty getReal first makes it release them properly."""
+        self.fmu.getReal([])
         self.fmu.fmi2FreeInstance(self.fmu.component)
         _router().queues.pop(self.instance_name, None)
 
@@ -235,6 +254,7 @@ class CoreInstance:
         self.name, self.info = name, info
         self._by_ref = {v.value_reference: v for v in info.variables.values()}
         self.core = self.core_class()
+        self.warnings: list[str] = []
 
     def initialize(self, parameters: dict[str, Any], step_size: float, start_time: float,
                    stop_time: float) -> None:
@@ -271,6 +291,7 @@ class CoreInstance:
         except Exception as error:
             raise CosimError(f"component '{self.name}': doStep(t = {time!r} s) failed: "
                              f"{error}") from error
+        _keep_warnings(self.warnings, self.core.take_notes())
 
     def reset(self) -> None:
         self.core = self.core_class()

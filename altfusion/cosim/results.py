@@ -9,11 +9,13 @@ import numpy as np
 
 @dataclass
 class Results:
-    """Time (s) and recorded signals; ``units`` maps each column to its unit ('' if none)."""
+    """Time (s) and recorded signals; ``units`` maps each column to its unit ('' if none);
+    ``warnings`` holds what each component logged as a warning (ignored samples, outliers)."""
 
     time: np.ndarray
     columns: dict[str, np.ndarray]
     units: dict[str, str] = field(default_factory=dict)
+    warnings: dict[str, list[str]] = field(default_factory=dict)
 
     def __getitem__(self, name: str) -> np.ndarray:
         return self.columns[name]

@@ -217,6 +217,8 @@ class Simulation:
         if self._runs:
             for component in self._components:
                 component.instance.reset()
+        for component in self._components:
+            component.instance.warnings.clear()
         self._runs += 1
         self._initialize(stop, overrides)
         rows = steps // every + 1
@@ -242,7 +244,9 @@ class Simulation:
             component.instance.terminate()
         columns = {path: data[:, i] for i, (path, *_rest) in enumerate(self._recorded)}
         units = {path: unit for path, *_rest, unit in self._recorded}
-        return Results(times, columns, units)
+        warnings = {c.name: list(c.instance.warnings) for c in self._components
+                    if c.instance.warnings}
+        return Results(times, columns, units, warnings)
 
     def _split_parameters(self, overrides: dict[str, Any]) -> dict[str, dict[str, Any]]:
         split: dict[str, dict[str, Any]] = {}

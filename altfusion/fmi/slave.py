@@ -188,6 +188,8 @@ class CoreSlave(Fmi2Slave):
         except Exception:
             self._log_exception(f"doStep(t = {current_time!r} s, h = {step_size!r} s)")
             return False
+        for note in self.core.take_notes():
+            self._log(Fmi2Status.warning, note)
         return True
 
     def terminate(self) -> None:

@@ -1,18 +1,19 @@
 """Declarations of an FMU's inputs and outputs (its parameters come from the core's Params)."""
 
 from dataclasses import dataclass
-from typing import Any
+
+from altfusion.signals import SIGNALS
 
 
 @dataclass(frozen=True)
 class Input:
-    """An FMI input mapped onto the core attribute of the same name."""
+    """An FMI input mapped onto the core attribute of the same name; its start value is the
+    core's default for that attribute."""
 
     name: str
     unit: str | None
     description: str
     type: type = float
-    start: Any = 0.0
     min: float | None = None
     max: float | None = None
 
@@ -32,3 +33,29 @@ class Output:
     depends_on: tuple[str, ...] | None = None
     min: float | None = None
     max: float | None = None
+
+
+def contract_input(name: str) -> Input:
+    """An input carrying a signal of the contract, with its type, unit and description."""
+    kind, unit, description = SIGNALS[name]
+    return Input(name, unit, description, type=kind)
+
+
+def contract_output(name: str, depends_on: tuple[str, ...] | None = None) -> Output:
+    """An output carrying a signal of the contract."""
+    kind, unit, description = SIGNALS[name]
+    return Output(name, unit, description, type=kind, depends_on=depends_on)
+
+
+def estimator_variables(streams, diagnostics: tuple[Output, ...] = ()) -> tuple:
+    """Inputs of an estimator's sensor streams, then h_est, vz_est, h_std and diagnostics.
+
+    The estimate at the end of a step fuses the samples of that instant, so every output
+    depends on every input (direct feedthrough)."""
+    names: list[str] = []
+    for stream in streams:
+        for name in (*stream.values, stream.count, *((stream.valid,) if stream.valid else ())):
+            if name not in names:
+                names.append(name)
+    outputs = [contract_output(n) for n in ("h_est", "vz_est", "h_std")]
+    return (*(contract_input(n) for n in names), *outputs, *diagnostics)

@@ -1,0 +1,1 @@
+"""Altitude estimators of the papers and the baseline, on shared Kalman machinery."""

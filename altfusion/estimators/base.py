@@ -1,0 +1,121 @@
+"""What every estimator shares: sensor streams, new-sample detection, guarded fusion, outputs.
+
+A sensor stream is a group of inputs named by the signal contract: the held sample values,
+``<prefix>_count`` and optionally a validity flag (``gps_fix``, ``radar_valid``...). A
+measurement update happens exactly once per new sample, i.e. when the count changes, whatever
+the estimator's own step; the time update runs at every step. A sample that is invalid or
+not finite is ignored and noted (logged by the FMU), so nothing propagates into the state.
+"""
+
+import math
+from abc import abstractmethod
+from dataclasses import dataclass
+from typing import ClassVar
+
+from altfusion.component import Component
+
+
+@dataclass(frozen=True)
+class Stream:
+    """The inputs of one sensor stream."""
+
+    prefix: str
+    values: tuple[str, ...]
+    valid: str | None = None
+
+    @property
+    def count(self) -> str:
+        return f"{self.prefix}_count"
+
+
+BARO = Stream("baro", ("baro_h",))
+BARO_T = Stream("baro", ("baro_h", "baro_T"))
+GPS = Stream("gps", ("gps_h",), "gps_fix")
+GPS_QUALITY = Stream("gps", ("gps_h", "gps_vdop", "gps_nsat"), "gps_fix")
+GPS_VZ = Stream("gps", ("gps_h", "gps_vz"), "gps_fix")
+ACC = Stream("acc", ("acc_z",))
+RADAR = Stream("radar", ("radar_h",), "radar_valid")
+LASER = Stream("laser", ("laser_h",), "laser_valid")
+
+
+class Estimator(Component):
+    """Base of the estimators: inputs from ``streams``, outputs ``h_est``, ``vz_est``, ``h_std``.
+
+    Subclasses implement :meth:`propagate` (time update over one step) and :meth:`fuse` (one
+    new sample of one stream) or :meth:`fuse_samples` (all new samples of a step together),
+    and set ``h_est``, ``vz_est``, ``h_std`` and their diagnostics.
+    """
+
+    streams: ClassVar[tuple[Stream, ...]]
+
+    def __init__(self, params=None, **kwargs):
+        for stream in self.streams:
+            for name in stream.values:
+                setattr(self, name, 0.0)
+            setattr(self, stream.count, 0)
+            if stream.valid:
+                setattr(self, stream.valid, True)
+        self.h_est = 0.0
+        self.vz_est = 0.0
+        self.h_std = 0.0
+        self.n_rejected = 0
+        self.n_ignored = 0
+        super().__init__(params, **kwargs)
+
+    def reset(self) -> None:
+        self._last_count = {s.prefix: getattr(self, s.count) for s in self.streams}
+        self.n_rejected = 0
+        self.n_ignored = 0
+        self.initialize_filter()
+
+    @abstractmethod
+    def initialize_filter(self) -> None:
+        """Set the filter's initial state and outputs from the parameters."""
+
+    @abstractmethod
+    def propagate(self, dt: float) -> None:
+        """Time update over one step of ``dt`` seconds."""
+
+    def fuse(self, stream: Stream, sample: dict[str, float]) -> None:
+        """Measurement update with one new, valid, finite sample of ``stream``."""
+        raise NotImplementedError(f"{type(self).__name__} must override fuse or fuse_samples")
+
+    def fuse_samples(self, samples: dict[Stream, dict[str, float]]) -> None:
+        """Fuse the new samples of this step; by default one by one in ``streams`` order."""
+        for stream, sample in samples.items():
+            self.fuse(stream, sample)
+
+    def update(self) -> None:
+        self.propagate(self.dt)
+        samples = {}
+        for stream in self.streams:
+            sample = self._new_sample(stream)
+            if sample is not None:
+                samples[stream] = sample
+        self.fuse_samples(samples)
+
+    def _new_sample(self, stream: Stream) -> dict[str, float] | None:
+        """The stream's sample if its count changed and it is valid and finite, else None."""
+        count = getattr(self, stream.count)
+        last = self._last_count[stream.prefix]
+        if count == last:
+            return None
+        self._last_count[stream.prefix] = count
+        if count > last + 1:
+            self.note(f"{stream.prefix}: {count - last - 1} sample(s) arrived between two "
+                      f"estimator steps; only the latest is fused")
+        if stream.valid and not getattr(self, stream.valid):
+            return None
+        sample = {name: float(getattr(self, name)) for name in stream.values}
+        bad = {name: value for name, value in sample.items() if not math.isfinite(value)}
+        if bad:
+            self.n_ignored += 1
+            self.note(f"{stream.prefix}: non-finite sample ignored {bad}")
+            return None
+        return sample
+
+    def reject(self, stream: Stream, innovation: float, sigma: float) -> None:
+        """Count and note a sample rejected by the innovation gate."""
+        self.n_rejected += 1
+        self.note(f"{stream.prefix}: sample rejected by the innovation gate "
+                  f"(innovation {innovation:.4g} m, {abs(innovation) / sigma:.3g} sigma)")

@@ -1,0 +1,96 @@
+"""BaselineKF: the "normal Kalman filter" the papers compare against.
+
+States x = [h, vz, b]: altitude (m), vertical speed (m/s) and barometer bias (m).
+
+    h(k+1)  = h + vz·dt          white acceleration, PSD q_a (m²/s³)
+    vz(k+1) = vz
+    b(k+1)  = b                  random walk, PSD q_b (m²/s)
+    baro:  z = h + b + v_B,  R_B constant
+    GPS:   z = h + v_G,      R_G constant
+
+Baro and GPS are each fused when a new sample arrives, at their own rates. The filter starts
+from its first sample (GPS if it comes first, else baro with zero bias); an innovation gate
+of ``gate_sigma`` standard deviations rejects outliers after that.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from altfusion.estimators.base import BARO, GPS, Estimator, Stream
+from altfusion.estimators.kalman import predict, scalar_gate, update
+from altfusion.params import param
+
+H_BARO = np.array([[1.0, 0.0, 1.0]])
+H_GPS = np.array([[1.0, 0.0, 0.0]])
+
+
+@dataclass(frozen=True)
+class BaselineKFParams:
+    accel_psd: float = param(0.5, "m2/s3", "PSD q_a of the white vertical acceleration",
+                             positive=True)
+    bias_psd: float = param(0.05, "m2/s", "PSD q_b of the baro-bias random walk", min=0.0)
+    R_baro: float = param(25.0, "m2", "Baro height noise variance R_B (seed 000: 5² m²)",
+                          positive=True)
+    R_gps: float = param(4900.0, "m2", "GPS height noise variance R_G (seed 000: 70² m²)",
+                         positive=True)
+    P0_h: float = param(100.0, "m2", "Initial altitude variance at the first sample",
+                        positive=True)
+    P0_vz: float = param(25.0, "m2/s2", "Initial vertical-speed variance", positive=True)
+    P0_b: float = param(400.0, "m2", "Initial baro-bias variance", positive=True)
+    gate_sigma: float = param(5.0, "1", "Innovation gate in standard deviations (0: off)",
+                              min=0.0)
+
+
+class BaselineKF(Estimator):
+    """Three-state Kalman filter on altitude, vertical speed and baro bias, constant R."""
+
+    Params = BaselineKFParams
+    streams = (BARO, GPS)
+
+    def initialize_filter(self) -> None:
+        p = self.params
+        self.x = np.zeros(3)
+        self.P = np.diag([p.P0_h, p.P0_vz, p.P0_b])
+        self.started = False
+        self.bias = 0.0
+        self.innovation = 0.0
+        self._publish()
+
+    def propagate(self, dt: float) -> None:
+        if not self.started:
+            return
+        p = self.params
+        F = np.array([[1.0, dt, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+        Q = np.array([
+            [p.accel_psd * dt**3 / 3.0, p.accel_psd * dt**2 / 2.0, 0.0],
+            [p.accel_psd * dt**2 / 2.0, p.accel_psd * dt, 0.0],
+            [0.0, 0.0, p.bias_psd * dt],
+        ])
+        self.x, self.P = predict(self.x, self.P, F, Q)
+        self._publish()
+
+    def fuse(self, stream: Stream, sample: dict[str, float]) -> None:
+        p = self.params
+        if stream is BARO:
+            z, H, R = sample["baro_h"], H_BARO, p.R_baro
+        else:
+            z, H, R = sample["gps_h"], H_GPS, p.R_gps
+        if not self.started:
+            self.x[0] = z - self.x[2] if stream is BARO else z
+            self.started = True
+            self._publish()
+            return
+        innovation = z - float((H @ self.x)[0])
+        variance = float((H @ self.P @ H.T)[0, 0]) + R
+        if not scalar_gate(innovation, variance, p.gate_sigma):
+            self.reject(stream, innovation, variance**0.5)
+            return
+        result = update(self.x, self.P, z, H, R)
+        self.x, self.P = result.x, result.P
+        self.innovation = float(result.innovation[0])
+        self._publish()
+
+    def _publish(self) -> None:
+        self.h_est, self.vz_est, self.bias = (float(v) for v in self.x)
+        self.h_std = float(np.sqrt(self.P[0, 0]))

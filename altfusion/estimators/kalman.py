@@ -1,0 +1,74 @@
+"""The Kalman machinery every estimator shares: propagation, update, gating.
+
+Written next to the equations (filterpy style) with the Joseph-form covariance update, which
+keeps P symmetric positive semi-definite for any gain, followed by explicit symmetrisation.
+All arrays are float numpy arrays; a scalar measurement has H of shape (1, n) and R (1, 1).
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+def symmetrize(P: np.ndarray) -> np.ndarray:
+    """(P + Pᵀ)/2: removes the asymmetry rounding errors accumulate."""
+    return 0.5 * (P + P.T)
+
+
+def predict(x: np.ndarray, P: np.ndarray, F: np.ndarray, Q: np.ndarray,
+            B: np.ndarray | None = None, u: np.ndarray | float | None = None,
+            ) -> tuple[np.ndarray, np.ndarray]:
+    """Time update: x⁻ = F x + B u,  P⁻ = F P Fᵀ + Q."""
+    x = F @ x
+    if B is not None and u is not None:
+        x = x + B @ np.atleast_1d(u)
+    return x, symmetrize(F @ P @ F.T + Q)
+
+
+@dataclass(frozen=True)
+class Update:
+    """Result of a measurement update."""
+
+    x: np.ndarray
+    P: np.ndarray
+    innovation: np.ndarray
+    """y = z - H x⁻"""
+    S: np.ndarray
+    """Innovation covariance H P⁻ Hᵀ + R."""
+    K: np.ndarray
+    """Gain P⁻ Hᵀ S⁻¹."""
+
+    @property
+    def nis(self) -> float:
+        """Normalised innovation squared yᵀ S⁻¹ y (χ² with dim(z) degrees of freedom)."""
+        return float(self.innovation @ np.linalg.solve(self.S, self.innovation))
+
+
+def update(x: np.ndarray, P: np.ndarray, z: np.ndarray | float, H: np.ndarray,
+           R: np.ndarray | float, gain_scale: float = 1.0) -> Update:
+    """Measurement update with the Joseph form.
+
+        y = z - H x⁻
+        S = H P⁻ Hᵀ + R
+        K = gain_scale · P⁻ Hᵀ S⁻¹
+        x = x⁻ + K y
+        P = (I - K H) P⁻ (I - K H)ᵀ + K R Kᵀ
+
+    ``gain_scale`` (a weight α ≤ 1 on the gain, seed 004 eq. 26) keeps the Joseph form exact
+    for the gain actually used.
+    """
+    z = np.atleast_1d(np.asarray(z, dtype=float))
+    R = np.atleast_2d(np.asarray(R, dtype=float))
+    y = z - H @ x
+    S = symmetrize(H @ P @ H.T + R)
+    K = gain_scale * np.linalg.solve(S, H @ P).T
+    I_KH = np.eye(len(x)) - K @ H
+    P_new = symmetrize(I_KH @ P @ I_KH.T + K @ R @ K.T)
+    return Update(x + K @ y, P_new, y, S, K)
+
+
+def scalar_gate(innovation: float, variance: float, sigmas: float) -> bool:
+    """True if |y| ≤ sigmas·√S (the measurement passes a gate of ``sigmas`` standard deviations).
+
+    ``sigmas <= 0`` disables the gate."""
+    return sigmas <= 0 or innovation * innovation <= sigmas * sigmas * variance

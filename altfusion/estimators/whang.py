@@ -1,0 +1,165 @@
+"""WhangGAEstimator: baro-error estimation by a Gaussian-approximation filter (seed 000).
+
+Fig. 1 of the paper, block by block:
+
+* baro-height computation: done by the air-data sensor (eq. 1), input ``baro_h``;
+* baro-error estimation, a GA filter on the scale factor a and bias b (eqs. 11-31):
+  - system propagation, random walks (eqs. 11-12, 17-18), Q_a and Q_b per air-data step;
+  - λ-update at the air-data rate with the temperature pseudo-measurement (eqs. 6-7, 19-22),
+    λ = s·(T_ADM - Γ̂ (ĥ_{k|k-1} - H0) - T0)/T0, Var = (Var T + Γ̂² Var ĥ + (ĥ - H0)² Var Γ)/T0²
+    (T0² as corrected in NOTES.md);
+  - z-update at the GPS rate with z = h^B - h^GPS (eqs. 23-31), using h^GPS - H0 where the
+    paper, taking H0 ≈ 0, writes h^GPS;
+* baro-error compensation: h^c = H0 + (h^B - H0 - b̂)/(1 + â) (eq. 32) filtered by the
+  alpha-beta Kalman filter of eqs. (33)-(34) with R_h = ((h^c - H0)² P^a + P^b + R^B)/(1 + â)².
+
+Sign of λ (NOTES.md): in a physically simulated atmosphere a warmer day than the calibration
+makes the barometer read low, h^B - H0 ≈ (1 - ΔT/T0)(h - H0), so the scale factor is
+a ≈ -ΔT/T0, opposite to eq. (3). With ``paper_lambda_sign`` false (default) the
+pseudo-measurement takes the physical sign s = -1; true restores the paper's eq. (6), s = +1.
+
+Rates: the alpha-beta filter and the random walks propagate at the estimator's own step (their
+noises, given per air-data step Δt^B, are scaled by dt/Δt^B); with the estimator stepped at
+Δt^B this is exactly the paper's filter.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from altfusion.constants import ISA_LAPSE_RATE, ISA_T0
+from altfusion.estimators.base import BARO_T, GPS, Estimator
+from altfusion.estimators.kalman import predict, scalar_gate, update
+from altfusion.params import param
+
+ONE = np.array([[1.0]])
+H_ALPHA_BETA = np.array([[1.0, 0.0]])
+MIN_LEVER = 1.0
+"""Below this height above H0 (m) the GPS carries no scale-factor information (eq. 23)."""
+
+
+@dataclass(frozen=True)
+class WhangParams:
+    H0: float = param(0.0, "m", "Launch height of the baro calibration")
+    T0: float = param(ISA_T0, "K", "Launch temperature of the baro calibration")
+    lapse_rate: float = param(ISA_LAPSE_RATE, "K/m", "Nominal lapse rate Γ̂")
+    lapse_rate_var: float = param(0.003**2, "K2/m2", "Var{Γ̂} (seed 000: (0.003 K/m)²)",
+                                  min=0.0)
+    R_temperature: float = param(1.5**2, "K2", "Var{T_ADM} (seed 000: 1.5² K²)", min=0.0)
+    R_baro: float = param(5.0**2, "m2", "R^B, baro-height noise variance (seed 000: 5² m²)",
+                          positive=True)
+    R_gps: float = param(70.0**2, "m2", "R^GPS (seed 000: 70² m²)", positive=True)
+    Q_a: float = param(2e-5, "1", "Scale-factor random-walk variance per air-data step",
+                       min=0.0)
+    Q_b: float = param(400.0, "m2", "Bias random-walk variance per air-data step", min=0.0)
+    P0_a: float = param(0.2**2, "1", "Initial scale-factor variance P^a_00", positive=True)
+    P0_b: float = param(20.0**2, "m2", "Initial bias variance P^b_00", positive=True)
+    Q_h: float = param(39.69, "m2/s2", "Alpha-beta process noise Q^h per air-data step",
+                       min=0.0)
+    P0_h: float = param(100.0, "m2", "Alpha-beta initial height variance", positive=True)
+    P0_vz: float = param(144.0, "m2/s2", "Alpha-beta initial rate variance", positive=True)
+    tau: float = param(100.0, "s", "Time constant τ of the rate state", positive=True)
+    adm_period: float = param(0.2, "s", "Air-data period Δt^B the noises are given for",
+                              positive=True)
+    paper_lambda_sign: bool = param(False, None, "λ with the sign of eq. (6) instead of "
+                                                 "the physical sign (see NOTES.md)")
+    gate_sigma: float = param(5.0, "1", "Innovation gate on GPS in standard deviations "
+                                        "(0: off)", min=0.0)
+
+
+class WhangGAEstimator(Estimator):
+    """Whang & Ra's GA baro-error estimation and compensation filter (seed 000, Fig. 1)."""
+
+    Params = WhangParams
+    streams = (BARO_T, GPS)
+
+    def initialize_filter(self) -> None:
+        p = self.params
+        self.a, self.P_a = 0.0, p.P0_a
+        self.b, self.P_b = 0.0, p.P0_b
+        self.x = np.array([p.H0, 0.0])
+        self.P = np.diag([p.P0_h, p.P0_vz])
+        self.started = False
+        self.h_prior = p.H0
+        self.h_comp = p.H0
+        self.lambda_meas = 0.0
+        self.baro = float(self.baro_h)
+        self._publish()
+
+    # -------------------------------------------------------------- time update
+    def propagate(self, dt: float) -> None:
+        p = self.params
+        scale = dt / p.adm_period
+        self.P_a += p.Q_a * scale                                               # (17)
+        self.P_b += p.Q_b * scale                                               # (18)
+        if self.started:
+            F = np.array([[1.0, dt], [0.0, 1.0 - dt / p.tau]])                  # (33)
+            Q = np.array([[0.0, 0.0], [0.0, p.Q_h * scale]])
+            self.x, self.P = predict(self.x, self.P, F, Q)
+        self.h_prior = float(self.x[0])
+
+    # -------------------------------------------------------------- measurements
+    def fuse_samples(self, samples) -> None:
+        """Air data: λ-update; GPS: z-update; then compensation with the latest estimates."""
+        air_data, gps = samples.get(BARO_T), samples.get(GPS)
+        if air_data is not None:
+            self.baro = air_data["baro_h"]
+            self._lambda_update(air_data["baro_T"])
+        if gps is not None:
+            self._z_update(gps["gps_h"])
+        if air_data is not None:
+            self._compensate()
+        self._publish()
+
+    def _lambda_update(self, temperature: float) -> None:
+        """Eqs. (6), (7), (19)-(22): scale factor from the ADM temperature."""
+        p = self.params
+        lever = self.h_prior - p.H0
+        sign = 1.0 if p.paper_lambda_sign else -1.0
+        self.lambda_meas = sign * (temperature - p.lapse_rate * lever - p.T0) / p.T0   # (6)
+        variance = (p.R_temperature + p.lapse_rate**2 * self.P[0, 0]
+                    + lever**2 * p.lapse_rate_var) / p.T0**2                        # (7)
+        result = update(np.array([self.a]), np.array([[self.P_a]]), self.lambda_meas, ONE,
+                        variance)                                               # (20)-(22)
+        self.a, self.P_a = float(result.x[0]), float(result.P[0, 0])
+
+    def _z_update(self, h_gps: float) -> None:
+        """Eqs. (23)-(31): scale factor and bias from z = h^B - h^GPS."""
+        p = self.params
+        R = p.R_baro + p.R_gps                                                  # (10)
+        z = self.baro - h_gps
+        lever = h_gps - p.H0
+        innovation = z - lever * self.a - self.b
+        if not scalar_gate(innovation, self.P_b + R + lever**2 * self.P_a, p.gate_sigma):
+            self.reject(GPS, innovation, (self.P_b + R + lever**2 * self.P_a) ** 0.5)
+            return
+        if abs(lever) >= MIN_LEVER:
+            z_a = (z - self.b) / lever                                          # (23)
+            S_a = (self.P_b + R) / lever**2
+            result = update(np.array([self.a]), np.array([[self.P_a]]), z_a, ONE, S_a)
+            self.a, self.P_a = float(result.x[0]), float(result.P[0, 0])        # (25), (26)
+        z_b = z - lever * self.a                                                # (30)
+        result = update(np.array([self.b]), np.array([[self.P_b]]), z_b, ONE, R)   # (27)-(29)
+        gain = float(result.K[0, 0])
+        self.b = float(result.x[0])
+        self.P_b = float(result.P[0, 0]) + (gain * lever) ** 2 * self.P_a       # (31)
+
+    def _compensate(self) -> None:
+        """Eq. (32) and the alpha-beta filter update (eq. 34) with its R_h."""
+        p = self.params
+        self.h_comp = p.H0 + (self.baro - p.H0 - self.b) / (1.0 + self.a)       # (32)
+        if not self.started:
+            self.x = np.array([self.h_comp, 0.0])
+            self.started = True
+            return
+        R_h = (((self.h_comp - p.H0) ** 2 * self.P_a + self.P_b + p.R_baro)
+               / (1.0 + self.a) ** 2)
+        result = update(self.x, self.P, self.h_comp, H_ALPHA_BETA, R_h)
+        self.x, self.P = result.x, result.P
+
+    def _publish(self) -> None:
+        self.h_est = float(self.x[0])
+        self.vz_est = float(self.x[1])
+        self.h_std = float(np.sqrt(self.P[0, 0]))
+        self.scale_factor, self.bias = self.a, self.b
+        self.scale_factor_var, self.bias_var = self.P_a, self.P_b

@@ -1,0 +1,35 @@
+"""The signal contract (``../shared/spec/signals.md``) as data: name -> (type, unit, meaning).
+
+Adapters declare contract signals from this table, so a signal has one unit and one
+description in every FMU that carries it.
+"""
+
+SIGNALS: dict[str, tuple[type, str | None, str]] = {
+    "baro_p": (float, "Pa", "Static pressure measured by the barometer"),
+    "baro_T": (float, "K", "Air temperature measured by the air-data module"),
+    "baro_h": (float, "m", "Barometric altitude from the launch calibration (MSL)"),
+    "baro_count": (int, None, "Number of air-data samples taken so far"),
+    "baro_time": (float, "s", "Time the held air-data sample was taken"),
+    "gps_h": (float, "m", "GNSS altitude (MSL)"),
+    "gps_vz": (float, "m/s", "GNSS vertical speed, positive up"),
+    "gps_vdop": (float, "1", "GNSS vertical dilution of precision"),
+    "gps_nsat": (int, None, "Number of satellites used in the GNSS fix"),
+    "gps_fix": (bool, None, "GNSS fix valid (false during outages)"),
+    "gps_count": (int, None, "Number of GNSS samples delivered so far"),
+    "gps_time": (float, "s", "Time the held GNSS sample was taken"),
+    "acc_z": (float, "m/s2", "Vertical acceleration (gravity removed), positive up"),
+    "acc_count": (int, None, "Number of accelerometer samples taken so far"),
+    "acc_time": (float, "s", "Time the held accelerometer sample was taken"),
+    "radar_h": (float, "m", "Radio-altimeter height above terrain"),
+    "radar_valid": (bool, None, "Radio-altimeter sample valid (within range)"),
+    "radar_count": (int, None, "Number of radio-altimeter samples taken so far"),
+    "radar_time": (float, "s", "Time the held radio-altimeter sample was taken"),
+    "laser_h": (float, "m", "Laser range to the terrain (0 when out of range)"),
+    "laser_valid": (bool, None, "Laser sample valid (0.1 m to 25 m)"),
+    "laser_count": (int, None, "Number of laser samples taken so far"),
+    "laser_time": (float, "s", "Time the held laser sample was taken"),
+    "wind_speed": (float, "m/s", "Wind speed at the vehicle"),
+    "h_est": (float, "m", "Altitude estimate (MSL)"),
+    "vz_est": (float, "m/s", "Vertical-speed estimate, positive up"),
+    "h_std": (float, "m", "The filter's own standard deviation of h_est"),
+}

@@ -1,0 +1,185 @@
+"""Estimator cores on synthetic sensor data: the base machinery and each paper's behaviour."""
+
+import math
+
+import numpy as np
+import pytest
+
+from altfusion.errors import ParameterError
+from altfusion.estimators.baseline import BaselineKF, BaselineKFParams
+from altfusion.estimators.hajiyev import HajiyevAdaptiveEstimator, HajiyevParams
+from altfusion.estimators.whang import WhangGAEstimator, WhangParams
+from altfusion.physics.atmosphere import Atmosphere, AtmosphereParams
+from altfusion.physics.barometric import height_from_pressure, pressure_at
+from altfusion.physics.profiles import make_profile
+
+ESTIMATORS = (BaselineKF, HajiyevAdaptiveEstimator, WhangGAEstimator)
+
+
+class Feeder:
+    """Drives an estimator core with held samples and counters, like the sensor FMUs do."""
+
+    def __init__(self, estimator):
+        self.estimator = estimator
+        self.counts = {"baro": 0, "gps": 0}
+        self.n = 0
+
+    def step(self, baro: float | None = None, gps: float | None = None, temperature=288.15,
+             fix: bool = True):
+        e = self.estimator
+        if baro is not None:
+            self.counts["baro"] += 1
+            e.baro_h, e.baro_count = baro, self.counts["baro"]
+            if hasattr(e, "baro_T"):
+                e.baro_T = temperature
+        if gps is not None:
+            self.counts["gps"] += 1
+            e.gps_h, e.gps_count = gps, self.counts["gps"]
+        e.gps_fix = fix
+        e.do_step(e.clock.time(self.n), e.dt)
+        self.n += 1
+
+
+@pytest.mark.parametrize("cls", ESTIMATORS)
+def test_one_update_per_new_sample_whatever_the_estimator_step(cls):
+    """The same samples (baro 0.2 s, GPS 1 s) through an estimator stepped at 0.2 s and at
+    0.01 s: Hajiyev (static) ends identical; the others may differ only by time-update
+    discretisation, and all fuse exactly 50 baro and 10 GPS samples."""
+    rng = np.random.default_rng(3)
+    data = [(100 + rng.normal(0, 5), 100 + rng.normal(0, 30)) for _ in range(50)]
+    results = []
+    for step in (0.2, 0.01):
+        feeder = Feeder(cls(step_size=step))
+        per_sample = round(0.2 / step)
+        for k, (baro, gps) in enumerate(data):
+            for i in range(per_sample):
+                last = i == per_sample - 1
+                feeder.step(baro=baro if last else None,
+                            gps=gps if last and (k + 1) % 5 == 0 else None)
+        assert feeder.estimator._last_count == {"baro": 50, "gps": 10}
+        results.append(feeder.estimator.h_est)
+    if cls is HajiyevAdaptiveEstimator:
+        assert results[0] == results[1]
+    else:
+        assert results[0] == pytest.approx(results[1], abs=2.0)
+
+
+@pytest.mark.parametrize("cls", ESTIMATORS)
+@pytest.mark.parametrize("bad", [math.nan, math.inf, -math.inf])
+def test_non_finite_samples_are_ignored_and_noted(cls, bad):
+    feeder = Feeder(cls(step_size=0.2))
+    for _ in range(20):
+        feeder.step(baro=100.0, gps=100.0)
+    before = (feeder.estimator.h_est, feeder.estimator.h_std)
+    feeder.estimator.take_notes()
+    feeder.step(baro=bad, gps=bad)
+    e = feeder.estimator
+    assert math.isfinite(e.h_est) and math.isfinite(e.h_std) and math.isfinite(e.vz_est)
+    assert e.h_est == pytest.approx(before[0], abs=0.5)
+    assert e.n_ignored == 2
+    notes = e.take_notes()
+    assert any("non-finite sample ignored" in n and "baro" in n for n in notes)
+    assert any("non-finite sample ignored" in n and "gps" in n for n in notes)
+
+
+@pytest.mark.parametrize("cls", ESTIMATORS)
+def test_gps_without_fix_is_not_fused(cls):
+    feeder = Feeder(cls(step_size=0.2))
+    for _ in range(20):
+        feeder.step(baro=100.0, gps=100.0)
+    feeder.step(baro=100.0, gps=5000.0, fix=False)
+    assert feeder.estimator.h_est == pytest.approx(100.0, abs=1.0)
+
+
+@pytest.mark.parametrize(("cls", "params", "name"), [
+    (BaselineKF, BaselineKFParams(R_gps=-1.0), "R_gps"),
+    (HajiyevAdaptiveEstimator, HajiyevParams(R_baro=0.0), "R_baro"),
+    (WhangGAEstimator, WhangParams(tau=0.0), "tau"),
+])
+def test_invalid_parameters_are_rejected_by_name(cls, params, name):
+    with pytest.raises(ParameterError, match=f"'{name}'"):
+        cls(params)
+
+
+def hajiyev_run(adaptive: bool, drift: bool, seed: int) -> np.ndarray:
+    """Seed 002 Section 5 with the paper's own measurement simulation (eqs. 32-33): the baro
+    altitude from eq. (1) with p0(k-1), T0(k-1) drifting from k = 23 (NOTES.md)."""
+    rng = np.random.default_rng(seed)
+    profile = make_profile("hajiyev")
+    estimator = HajiyevAdaptiveEstimator(HajiyevParams(adaptive=adaptive), step_size=1.0)
+    feeder = Feeder(estimator)
+    errors = []
+    for k in range(1, 1561):
+        h = profile.reference(float(k))[0]
+        baro = h
+        if drift and k >= 23:
+            p = pressure_at(h, 101325.0, 288.15, -0.0065, 0.0, 9.81, 287.0)
+            baro = height_from_pressure(p, 101325.0 - 10.0 * (k - 1), 288.15 - 0.01 * (k - 1),
+                                        -0.0065, 0.0, 9.81, 287.0)
+        feeder.step(baro=baro + 9.0 * rng.standard_normal(),
+                    gps=h + 13.0 * rng.standard_normal())
+        errors.append(estimator.h_est - h)
+    return np.array(errors)
+
+
+def test_hajiyev_constant_case_has_the_theoretical_fused_variance():
+    """Eq. (13): R_B R_GPS/(R_B + R_GPS) = 54.756 m². 10 runs × 1560 samples: the sample
+    variance has σ ≈ 54.756·√(2/15600) = 0.62 m²; 99.9 % interval ±3.29σ = ±2.04 m²."""
+    errors = np.concatenate([hajiyev_run(False, False, seed) for seed in range(10)])
+    assert errors.var() == pytest.approx(81 * 169 / 250, abs=2.04)
+
+
+def test_hajiyev_drift_adaptive_stays_near_gps_level_non_adaptive_diverges():
+    adaptive = hajiyev_run(True, True, 1)
+    plain = hajiyev_run(False, True, 1)
+    # Table 1: 159-165 m²; the adaptive estimate leans on GPS (169 m²) once the baro drifts
+    assert 140.0 < adaptive[400:].var() < 180.0
+    assert abs(adaptive.mean()) < 3.0
+    assert abs(plain[-100:]).mean() > 300.0
+
+
+def whang_runs(paper_sign: bool, runs: int = 6):
+    """Seed 000 Section 3 on synthetic air data: our atmosphere with a random lapse-rate change
+    every 10 s (σ 0.003 K/m), baro from eq. (1) + 5 m noise, ADM temperature + 1.5 K, GPS 70 m."""
+    errors = {"baro": [], "comp": [], "final": [], "gps": []}
+    for run in range(runs):
+        rng = np.random.default_rng(run)
+        profile = make_profile("whang2008")
+        atmosphere = Atmosphere(AtmosphereParams(lapse_rate_std=0.003, seed=run), step_size=0.2)
+        estimator = WhangGAEstimator(WhangParams(paper_lambda_sign=paper_sign), step_size=0.2)
+        feeder = Feeder(estimator)
+        for n in range(3000):
+            h = profile.reference(0.2 * (n + 1))[0]
+            atmosphere.h = h
+            atmosphere.do_step(0.2 * n, 0.2)
+            baro = height_from_pressure(atmosphere.p_static, 101325.0, 288.15, -0.0065)
+            baro += 5.0 * rng.standard_normal()
+            gps = h + 70.0 * rng.standard_normal() if (n + 1) % 5 == 0 else None
+            feeder.step(baro=baro, gps=gps, temperature=atmosphere.T_air + 1.5 * rng.normal())
+            errors["baro"].append(baro - h)
+            errors["comp"].append(estimator.h_comp - h)
+            errors["final"].append(estimator.h_est - h)
+            if gps is not None:
+                errors["gps"].append(gps - h)
+    return {k: float(np.sqrt(np.mean(np.square(v)))) for k, v in errors.items()}
+
+
+def test_whang_final_height_beats_gps_and_compensated_height():
+    rms = whang_runs(paper_sign=False)
+    assert rms["final"] < rms["comp"] < rms["gps"]
+    assert rms["final"] < 0.7 * rms["gps"]
+
+
+def test_whang_physical_lambda_sign_beats_the_papers_in_a_physical_atmosphere():
+    assert whang_runs(paper_sign=False)["final"] < whang_runs(paper_sign=True)["final"]
+
+
+def test_baseline_estimates_a_constant_baro_bias():
+    rng = np.random.default_rng(5)
+    feeder = Feeder(BaselineKF(step_size=0.2))
+    for n in range(3000):
+        gps = 500.0 + 70.0 * rng.standard_normal() if n % 5 == 4 else None
+        feeder.step(baro=530.0 + 5.0 * rng.standard_normal(), gps=gps)
+    # 600 GPS samples of σ 70 m: the bias is known to about 70/√600 ≈ 3 m
+    assert feeder.estimator.bias == pytest.approx(30.0, abs=12.0)
+    assert feeder.estimator.h_est == pytest.approx(500.0, abs=12.0)
