@@ -20,8 +20,8 @@ between GPS samples the estimate follows each new baro sample with the last corr
 held, and its variance grows by ``drift_psd`` per second (an addition to the paper, so that
 ``h_std`` stays honest through GPS outages). A GPS sample whose residual jumps by more than
 ``gate_sigma`` standard deviations from the last accepted residual is rejected and logged (also
-an addition: outliers are jumps, while the drift the adaptation follows is gradual). The algorithm estimates no vertical speed:
-``vz_est`` is always 0.
+an addition: outliers are jumps, while the drift the adaptation follows is gradual). The
+algorithm estimates no vertical speed: ``vz_est`` is always 0.
 """
 
 from dataclasses import dataclass
