@@ -19,10 +19,14 @@ from fmpy import calloc, extract, free, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import (
     FMU2Slave,
+    fmi2Boolean,
     fmi2CallbackAllocateMemoryTYPE,
     fmi2CallbackFreeMemoryTYPE,
     fmi2CallbackFunctions,
     fmi2CallbackLoggerTYPE,
+    fmi2Integer,
+    fmi2Real,
+    fmi2ValueReference,
 )
 from fmpy.logging import addLoggerProxy
 
@@ -30,6 +34,7 @@ from altfusion.params import coerce
 from altfusion.version import CORE_VERSION
 
 FMI_TYPES = ("Real", "Integer", "Boolean")
+_C_TYPES = {"Real": fmi2Real, "Integer": fmi2Integer, "Boolean": fmi2Boolean}
 PY_TYPES = {"Real": float, "Integer": int, "Boolean": bool, "String": str}
 
 
@@ -186,10 +191,65 @@ class FmuInstance:
         except FMICallException as error:
             details = "\n".join(self.errors()) or f"{what} failed: {error}"
             raise CosimError(f"component '{self.name}': {details}") from None
+        if self.messages:
+            self._raise_logged_errors(what)
+        return result
+
+    def _raise_logged_errors(self, what: str) -> None:
         errors = self.errors()
         if errors:
             raise CosimError(f"component '{self.name}' ({what}): " + "\n".join(errors))
-        return result
+
+    def _check_status(self, status: int, what: str) -> None:
+        """Status handling of the fast paths (raw calls, no fmpy wrapper)."""
+        if status > 1:
+            details = "\n".join(self.errors()) or f"{what} failed with status {status}"
+            raise CosimError(f"component '{self.name}': {details}")
+        if self.messages:
+            self._raise_logged_errors(what)
+
+    def reader(self, kind: str, vrs: list[int]):
+        """A function returning the current values of ``vrs`` (a reused ctypes buffer)."""
+        function = self.fmu._functions[f"fmi2Get{kind}"]
+        c_type = _C_TYPES[kind]
+        refs = (fmi2ValueReference * len(vrs))(*vrs)
+        buffer = (c_type * len(vrs))()
+        component, count, check = self.fmu.component, len(vrs), self._check_status
+
+        def read():
+            status = function(component, refs, count, buffer)
+            if status or self.messages:
+                check(status, f"get{kind}")
+            return buffer
+
+        return read
+
+    def writer(self, kind: str, vrs: list[int]):
+        """A function setting ``vrs`` to a sequence of values (reused ctypes buffers)."""
+        function = self.fmu._functions[f"fmi2Set{kind}"]
+        refs = (fmi2ValueReference * len(vrs))(*vrs)
+        buffer = (_C_TYPES[kind] * len(vrs))()
+        component, count, check = self.fmu.component, len(vrs), self._check_status
+
+        def write(values):
+            buffer[:] = values
+            status = function(component, refs, count, buffer)
+            if status or self.messages:
+                check(status, f"set{kind}")
+
+        return write
+
+    def stepper(self):
+        """A function doing fmi2DoStep(t, h) without fmpy's per-call bookkeeping."""
+        function = self.fmu._functions["fmi2DoStep"]
+        component, check = self.fmu.component, self._check_status
+
+        def step(time: float, step: float) -> None:
+            status = function(component, time, step, 1)
+            if status or self.messages:
+                check(status, f"doStep(t = {time!r} s, h = {step!r} s)")
+
+        return step
 
     def initialize(self, parameters: dict[str, Any], step_size: float, start_time: float,
                    stop_time: float) -> None:
@@ -284,6 +344,24 @@ class CoreInstance:
     def set(self, kind: str, vrs: list[int], values: list[Any]) -> None:
         for vr, value in zip(vrs, values, strict=True):
             setattr(self.core, self._by_ref[vr].name, PY_TYPES[kind](value))
+
+    def reader(self, kind: str, vrs: list[int]):
+        names = [self._by_ref[vr].name for vr in vrs]
+        return lambda: [getattr(self.core, name) for name in names]
+
+    def writer(self, kind: str, vrs: list[int]):
+        names = [self._by_ref[vr].name for vr in vrs]
+        convert = PY_TYPES[kind]
+
+        def write(values):
+            core = self.core
+            for name, value in zip(names, values, strict=True):
+                setattr(core, name, convert(value))
+
+        return write
+
+    def stepper(self):
+        return self.do_step
 
     def do_step(self, time: float, step: float) -> None:
         try:

@@ -59,15 +59,31 @@ class _Stepped:
     parameters: dict[str, Any]
     output_names: dict[str, list[str]] = field(default_factory=dict)
     output_vrs: dict[str, list[int]] = field(default_factory=dict)
-    outputs: dict[str, list[Any]] = field(default_factory=dict)
+    outputs: dict[str, Any] = field(default_factory=dict)
     feedthrough: list[tuple[str, int, _Link]] = field(default_factory=list)
     delayed: list[tuple[str, int, _Link]] = field(default_factory=list)
     latched: list[Any] = field(default_factory=list)
 
+    def prepare(self) -> None:
+        """Build the batched readers and writers: one get and one set call per type."""
+        self._readers = [(kind, self.instance.reader(kind, vrs))
+                         for kind, vrs in self.output_vrs.items() if vrs]
+        inputs: dict[str, list[tuple[int, int | None, _Link]]] = {}
+        for position, (kind, vr, link) in enumerate(self.delayed):
+            inputs.setdefault(kind, []).append((vr, position, link))
+        for kind, vr, link in self.feedthrough:
+            inputs.setdefault(kind, []).append((vr, None, link))
+        self._writers = [
+            (self.instance.writer(kind, [vr for vr, _, _ in entries]),
+             [(position, link.source.outputs, link.kind, link.slot)
+              for _, position, link in entries])
+            for kind, entries in inputs.items()
+        ]
+        self.step = self.instance.stepper()
+
     def refresh_outputs(self) -> None:
-        for kind, vrs in self.output_vrs.items():
-            if vrs:
-                self.outputs[kind] = self.instance.get(kind, vrs)
+        for kind, read in self._readers:
+            self.outputs[kind] = read()
 
     def value(self, kind: str, slot: int) -> Any:
         return self.outputs[kind][slot]
@@ -76,17 +92,10 @@ class _Stepped:
         self.latched = [link.source.value(link.kind, link.slot) for _, _, link in self.delayed]
 
     def apply_inputs(self) -> None:
-        grouped: dict[str, tuple[list[int], list[Any]]] = {}
-        for (kind, vr, _link), value in zip(self.delayed, self.latched, strict=True):
-            vrs, values = grouped.setdefault(kind, ([], []))
-            vrs.append(vr)
-            values.append(value)
-        for kind, vr, link in self.feedthrough:
-            vrs, values = grouped.setdefault(kind, ([], []))
-            vrs.append(vr)
-            values.append(link.source.value(link.kind, link.slot))
-        for kind, (vrs, values) in grouped.items():
-            self.instance.set(kind, vrs, values)
+        latched = self.latched
+        for write, sources in self._writers:
+            write([latched[position] if position is not None else outputs[kind][slot]
+                   for position, outputs, kind, slot in sources])
 
 
 class Simulation:
@@ -113,6 +122,8 @@ class Simulation:
             self._recorded = self._resolve_recording()
             self._resolve_connections()
             self._order = self._step_order()
+            for component in self._components:
+                component.prepare()
         except Exception:
             self.close()
             raise
@@ -236,7 +247,7 @@ class Simulation:
                     continue
                 component.apply_inputs()
                 t_start = self.base.time(end - ratio)
-                component.instance.do_step(t_start, self.base.time(end) - t_start)
+                component.step(t_start, self.base.time(end) - t_start)
                 component.refresh_outputs()
             if end % every == 0:
                 self._record(data, times, end // every, end)

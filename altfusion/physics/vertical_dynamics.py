@@ -32,7 +32,7 @@ class VerticalDynamicsParams:
     ground_h: float = param(0.0, "m", "Ground height (MSL) the vehicle rests on")
     gravity: float = param(G0, "m/s2", "Gravitational acceleration", positive=True)
     max_substep: float = param(
-        0.001, "s", "Longest internal RK4 sub-step", positive=True, max=1.0
+        0.005, "s", "Longest internal RK4 sub-step", positive=True, max=1.0
     )
 
 

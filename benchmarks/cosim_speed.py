@@ -1,0 +1,93 @@
+"""Co-simulation speed: real-time factor, FMI overhead ratio and the cost per step of each
+FMU and of the runner. Run by hand (never as a test):
+
+    python benchmarks/cosim_speed.py [SYSTEM ...] [--stop T] [--repeat N]
+
+SYSTEM names come from altfusion.systems (default: every system whose components all have
+built FMUs in models/). For each system it prints:
+- the real-time factor (simulated s per wall s) through the FMUs and with the core objects
+  stepped directly (backend "core"), and their ratio (the FMI overhead ratio);
+- whether both backends give identical results;
+- the wall time per call of each component's do_step and of the runner's own work.
+"""
+
+import argparse
+import statistics
+import time
+from collections import defaultdict
+from pathlib import Path
+
+import numpy as np
+
+from altfusion.cosim import Simulation
+from altfusion.systems import SYSTEMS, build_system
+
+MODELS = Path(__file__).resolve().parents[1] / "models"
+
+
+def timed_run(system, fmus, backend, stop, repeat):
+    """Best wall time of ``repeat`` runs (instances reused), and the last results."""
+    walls = []
+    with Simulation(system, fmus, backend) as simulation:
+        simulation.run(stop_time=min(stop, 1.0))  # warm-up: imports, first instantiation
+        for _ in range(repeat):
+            start = time.perf_counter()
+            results = simulation.run(stop_time=stop)
+            walls.append(time.perf_counter() - start)
+    return min(walls), results
+
+
+def step_costs(system, fmus, stop):
+    """Seconds per do_step call of each component, and the runner's remaining time per step."""
+    costs: dict[str, list[float]] = defaultdict(list)
+    with Simulation(system, fmus, "fmu") as simulation:
+        for component in simulation._components:
+            original = component.step
+
+            def timed(t, h, original=original, name=component.name):
+                start = time.perf_counter()
+                original(t, h)
+                costs[name].append(time.perf_counter() - start)
+
+            component.step = timed
+        start = time.perf_counter()
+        simulation.run(stop_time=stop)
+        wall = time.perf_counter() - start
+    base_steps = round(stop / system.base_step)
+    stepping = sum(sum(c) for c in costs.values())
+    return {name: statistics.fmean(c) for name, c in costs.items()}, \
+        (wall - stepping) / base_steps
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("systems", nargs="*")
+    parser.add_argument("--stop", type=float, default=None, help="simulated time, s")
+    parser.add_argument("--repeat", type=int, default=3)
+    args = parser.parse_args()
+    fmus = {p.stem: p for p in MODELS.glob("*.fmu")}
+    names = args.systems or [n for n in SYSTEMS
+                             if all(c.fmu in fmus for c in build_system(n).components)]
+    for name in names:
+        system = build_system(name)
+        stop = args.stop or system.stop_time
+        fmu_wall, fmu_results = timed_run(system, fmus, "fmu", stop, args.repeat)
+        core_wall, core_results = timed_run(system, fmus, "core", stop, args.repeat)
+        identical = all(np.array_equal(fmu_results[c], core_results[c])
+                        for c in fmu_results.columns)
+        print(f"\n{name}: {len(system.components)} components, base step "
+              f"{system.base_step} s, {stop:g} s simulated")
+        print(f"  real-time factor, FMUs      : {stop / fmu_wall:8.1f}  ({fmu_wall:.2f} s)")
+        print(f"  real-time factor, core only : {stop / core_wall:8.1f}  ({core_wall:.2f} s)")
+        print(f"  FMI overhead ratio          : {fmu_wall / core_wall:8.2f}")
+        print(f"  identical results           : {identical}")
+        per_step, runner = step_costs(system, fmus, stop)
+        for component, seconds in per_step.items():
+            spec = system.component(component)
+            print(f"  {component:<14} ({spec.fmu}, step {spec.step_size:g} s): "
+                  f"{seconds * 1e6:7.1f} µs per do_step")
+        print(f"  runner (transfer, recording, bookkeeping): {runner * 1e6:7.1f} µs per base step")
+
+
+if __name__ == "__main__":
+    main()
