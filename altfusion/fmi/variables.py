@@ -41,10 +41,12 @@ def contract_input(name: str) -> Input:
     return Input(name, unit, description, type=kind)
 
 
-def contract_output(name: str, depends_on: tuple[str, ...] | None = None) -> Output:
-    """An output carrying a signal of the contract."""
-    kind, unit, description = SIGNALS[name]
-    return Output(name, unit, description, type=kind, depends_on=depends_on)
+def contract_output(name: str, depends_on: tuple[str, ...] | None = None,
+                    description: str | None = None) -> Output:
+    """An output carrying a signal of the contract; ``description`` replaces the contract's
+    where an FMU's source of the signal needs saying (a replayed log, not a sensor model)."""
+    kind, unit, meaning = SIGNALS[name]
+    return Output(name, unit, description or meaning, type=kind, depends_on=depends_on)
 
 
 def estimator_variables(streams, diagnostics: tuple[Output, ...] = ()) -> tuple:
