@@ -138,6 +138,20 @@ def test_hajiyev_drift_adaptive_stays_near_gps_level_non_adaptive_diverges():
     assert abs(plain[-100:]).mean() > 300.0
 
 
+def test_hajiyev_waits_for_the_first_baro_sample_before_fusing_gps():
+    """In a replayed log GPS may arrive first (Auterion log: 3.5 ms before the baro). Fused
+    against the placeholder h_B = 0, its 429 m residual became the outlier gate's reference
+    and every later GPS sample was rejected; now it is not fused and is noted."""
+    feeder = Feeder(HajiyevAdaptiveEstimator(step_size=0.2))
+    feeder.step(gps=429.0)
+    assert any("before the first baro sample" in n for n in feeder.estimator.take_notes())
+    for _ in range(20):
+        feeder.step(baro=275.0, gps=429.0)
+    assert feeder.estimator.n_rejected == 0
+    # eqs. (30), (27): S R_B = Δ² - R_GPS, so K = 1 - R_GPS/Δ² with Δ = 154 m
+    assert feeder.estimator.h_est == pytest.approx(275.0 + 154.0 * (1 - 169.0 / 154.0**2))
+
+
 def whang_runs(paper_sign: bool, runs: int = 6):
     """Seed 000 Section 3 on synthetic air data: our atmosphere with a random lapse-rate change
     every 10 s (σ 0.003 K/m), baro from eq. (1) + 5 m noise, ADM temperature + 1.5 K, GPS 70 m."""

@@ -21,7 +21,8 @@ held, and its variance grows by ``drift_psd`` per second (an addition to the pap
 ``h_std`` stays honest through GPS outages). A GPS sample whose residual jumps by more than
 ``gate_sigma`` standard deviations from the last accepted residual is rejected and logged (also
 an addition: outliers are jumps, while the drift the adaptation follows is gradual). The
-algorithm estimates no vertical speed: ``vz_est`` is always 0.
+algorithm estimates no vertical speed: ``vz_est`` is always 0. GPS samples that arrive before
+the first baro sample are not fused (eq. 18 needs h_B; in a replayed log GPS may come first).
 """
 
 from dataclasses import dataclass
@@ -60,6 +61,7 @@ class HajiyevAdaptiveEstimator(Estimator):
 
     def initialize_filter(self) -> None:
         self.baro = float(self.baro_h)
+        self._have_baro = self.baro_count > 0
         self.adaptive_factor = 1.0
         self.gain = 0.0
         self.residual = 0.0
@@ -78,7 +80,11 @@ class HajiyevAdaptiveEstimator(Estimator):
         p = self.params
         if stream is BARO:
             self.baro = sample["baro_h"]
+            self._have_baro = True
             self._publish()
+            return
+        if not self._have_baro:
+            self.note("gps: sample before the first baro sample not fused (no h_B for eq. 18)")
             return
         residual = sample["gps_h"] - self.baro                                  # (18)
         if self._accepted_residual is not None:
