@@ -38,6 +38,16 @@ RADAR = Stream("radar", ("radar_h",), "radar_valid")
 LASER = Stream("laser", ("laser_h",), "laser_valid")
 
 
+def stream_inputs(streams: tuple[Stream, ...]) -> tuple[str, ...]:
+    """The input names of ``streams`` in declaration order: values, count, validity flag."""
+    names: list[str] = []
+    for stream in streams:
+        for name in (*stream.values, stream.count, *((stream.valid,) if stream.valid else ())):
+            if name not in names:
+                names.append(name)
+    return tuple(names)
+
+
 class Estimator(Component):
     """Base of the estimators: inputs from ``streams``, outputs ``h_est``, ``vz_est``, ``h_std``.
 

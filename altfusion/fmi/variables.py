@@ -2,6 +2,7 @@
 
 from dataclasses import dataclass
 
+from altfusion.estimators.base import stream_inputs
 from altfusion.signals import SIGNALS
 
 
@@ -54,10 +55,6 @@ def estimator_variables(streams, diagnostics: tuple[Output, ...] = ()) -> tuple:
 
     The estimate at the end of a step fuses the samples of that instant, so every output
     depends on every input (direct feedthrough)."""
-    names: list[str] = []
-    for stream in streams:
-        for name in (*stream.values, stream.count, *((stream.valid,) if stream.valid else ())):
-            if name not in names:
-                names.append(name)
+    names = stream_inputs(streams)
     outputs = [contract_output(n) for n in ("h_est", "vz_est", "h_std")]
     return (*(contract_input(n) for n in names), *outputs, *diagnostics)
