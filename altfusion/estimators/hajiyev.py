@@ -61,7 +61,6 @@ class HajiyevAdaptiveEstimator(Estimator):
 
     def initialize_filter(self) -> None:
         self.baro = float(self.baro_h)
-        self._have_baro = self.baro_count > 0
         self.adaptive_factor = 1.0
         self.gain = 0.0
         self.residual = 0.0
@@ -80,10 +79,9 @@ class HajiyevAdaptiveEstimator(Estimator):
         p = self.params
         if stream is BARO:
             self.baro = sample["baro_h"]
-            self._have_baro = True
             self._publish()
             return
-        if not self._have_baro:
+        if not self.has_sample("baro"):
             self.note("gps: sample before the first baro sample not fused (no h_B for eq. 18)")
             return
         residual = sample["gps_h"] - self.baro                                  # (18)
