@@ -14,7 +14,7 @@ replay runs them with noises from the logged sensors instead:
 * GPS height σ 0.8 m: the receivers' own ``epv`` (0.70-0.83 m on the Auterion flight, 0.4 m
   in SITL once fixed);
 * baro height σ 0.6 m: the sample-to-sample scatter of ``baro_alt_meter`` on the Auterion
-  flight, std(Δh)/√2 = 0.56 m;
+  flight, std(Δh)/√2 = 0.59 m;
 * baro offset prior σ 200 m: PX4's baro altitude is referenced to its QNH setting, not to the
   launch site, so the offset to GPS altitude is unknown up to the QNH error (±25 hPa ≈ ±200 m;
   the Auterion log has -155 m). BaselineKF and Whang learn it as their bias state.
