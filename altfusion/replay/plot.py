@@ -24,7 +24,7 @@ def plot_replay(results: Results, estimators: list[str], path: Path, title: str,
     each estimate implies (bottom); the shaded span before ``start`` is offset learning."""
     ranged = range_prefix(results)
     panels = 3 if ranged else 2
-    fig, axes = plt.subplots(panels, 1, sharex=True, figsize=(10, 2.9 * panels + 0.6))
+    fig, axes = plt.subplots(panels, 1, sharex=True, figsize=(12, 2.9 * panels + 0.6))
     ekf_t, ekf_h = _samples(results, "ekf", "ekf_h", "ekf_valid")
     gps_t, gps_h = _samples(results, "gps", "gps_h", "gps_fix")
     baro_t, baro_h = _samples(results, "baro", "baro_h")
@@ -69,7 +69,7 @@ def plot_replay(results: Results, estimators: list[str], path: Path, title: str,
     for ax in axes:
         ax.axvspan(results.time[0], start, color="0.92", zorder=0)
         ax.grid(True, alpha=0.3)
-        ax.legend(loc="best", fontsize=7)
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7)
     axes[-1].set_xlabel("log time [s] (shaded: before the offsets are learnt)")
     fig.suptitle(title, fontsize=9)
     fig.tight_layout()
