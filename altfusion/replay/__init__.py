@@ -6,9 +6,12 @@
 * :mod:`~altfusion.replay.extract` - the PX4 topics -> contract streams, on plain arrays;
 * :mod:`~altfusion.replay.ulog` - reading a ``.ulg`` file with ``pyulog``;
 * :mod:`~altfusion.replay.component` - the ``LogReplay`` core behind the FMU;
-* :mod:`~altfusion.replay.compare`, :mod:`~altfusion.replay.plot`,
-  :mod:`~altfusion.replay.tuning` - comparing estimators with PX4 EKF2 after a replay run.
+* :mod:`~altfusion.replay.compare`, :mod:`~altfusion.replay.plot` - comparing estimators with
+  PX4 EKF2 after a replay run (numpy and matplotlib on recorded results);
+* :mod:`~altfusion.replay.run` - ``altfusion replay``: builds and runs the system through the
+  co-simulation runner (the replay systems and their tuning are in
+  :mod:`altfusion.systems.replay`).
 
-Only the first four and the component are core code (numpy and pyulog); nothing here imports
-FMI code.
+The reader and the component are core code (numpy and pyulog) and import no FMI code; only
+``run`` steps FMUs, and no FMU imports it.
 """
