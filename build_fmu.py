@@ -24,18 +24,30 @@ def slave_scripts() -> list[Path]:
     return sorted(FMU_SRC.glob("*_slave.py"))
 
 
-def model_name(script: Path) -> str:
-    """The FMU's model name: the slave class defined in the script."""
+def model_class(script: Path) -> type:
+    """The slave class defined in the script."""
     from pythonfmu.builder import get_model_class
 
     if str(script.parent) not in sys.path:
         sys.path.insert(0, str(script.parent))
-    return get_model_class(script).__name__
+    return get_model_class(script)
+
+
+def model_name(script: Path) -> str:
+    """The FMU's model name: the slave class defined in the script."""
+    return model_class(script).__name__
+
+
+def bundled_files(script: Path) -> list[Path]:
+    """Files or folders (the slave's ``bundled_files``, relative to the repository) that the
+    FMU carries in its resources folder, e.g. the flight logs of LogReplay."""
+    return [HERE / name for name in getattr(model_class(script), "bundled_files", ())]
 
 
 def sources_mtime(script: Path) -> float:
     core = [p for p in CORE.rglob("*.py") if "__pycache__" not in p.parts]
-    return max(p.stat().st_mtime for p in [script, Path(__file__), *core])
+    bundled = [f for p in bundled_files(script) for f in ([p] if p.is_file() else p.rglob("*"))]
+    return max(p.stat().st_mtime for p in [script, Path(__file__), *core, *bundled])
 
 
 def stale(script: Path, fmu: Path) -> bool:
@@ -46,7 +58,7 @@ def build_fmu(script: Path) -> Path:
     from pythonfmu.builder import FmuBuilder
 
     return FmuBuilder.build_FMU(
-        script, dest=MODELS, project_files=[CORE],
+        script, dest=MODELS, project_files=[CORE, *bundled_files(script)],
         canGetAndSetFMUstate=True, canSerializeFMUstate=True,
         canHandleVariableCommunicationStepSize=False,
     )

@@ -8,6 +8,7 @@ from typing import Any
 from altfusion.cosim.instances import PY_TYPES, CosimError, fmu_info
 from altfusion.cosim.runner import Simulation
 from altfusion.cosim.ssp import LoadedSystem, read_ssp
+from altfusion.systems.replay import CATALOG_ESTIMATORS
 
 
 def parse_settings(loaded: LoadedSystem, settings: list[str]) -> dict[str, Any]:
@@ -50,6 +51,46 @@ def command_run(args: argparse.Namespace) -> int:
     return 0
 
 
+def command_replay(args: argparse.Namespace) -> int:
+    from altfusion.cosim.ssp import LoadedSystem
+    from altfusion.replay.compare import format_table, sample_counts
+    from altfusion.replay.run import plan_replay, run_replay
+    from altfusion.replay.ulog import LogReadError
+
+    fmu_paths = {path.stem: path for path in Path(args.models).glob("*.fmu")}
+    estimators = [name.strip() for name in args.estimators.split(",") if name.strip()]
+    try:
+        plan = plan_replay(args.log, estimators, fmu_paths, args.paper_tuning,
+                           args.time_offset)
+        settings = parse_settings(LoadedSystem(plan.spec, fmu_paths), args.set)
+        replay = run_replay(plan, fmu_paths, Path(args.out), settings)
+    except LogReadError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+    log = replay.log
+    print(f"{Path(args.log).name}: {log.duration:.3f} s replayed to "
+          f"{replay.results.time[-1]:g} s (base step {replay.spec.base_step:g} s)")
+    for line in log.report():
+        print(f"  log: {line}")
+    for name, inputs in replay.unconnected.items():
+        print(f"  warning: {name} inputs not in the log, left at their defaults: "
+              f"{', '.join(inputs)}")
+    expected = {p: len(s) for p, s in log.streams.items()}
+    counts = ", ".join(f"{p} {n} of {expected.get(p, 0)}"
+                       for p, n in sample_counts(replay.results).items() if expected.get(p))
+    print(f"  samples delivered: {counts}")
+    for name, warnings in replay.results.warnings.items():
+        if name != "replay":
+            print(f"  {name}: {len(warnings)} warning(s), first: {warnings[0]}")
+    print(f"\nFrom t = {replay.settle_time:.2f} s (5 s after the first GPS fix: offsets "
+          f"learnt); heights in m, MSL. 'vs EKF2' at EKF2 samples: d = h - ekf_h, std = d in "
+          f"a common datum (mean removed); GPS innov = gps_h - prior h; NIS over h_std² + "
+          f"epv²; h-range = implied ground height, flat ground.\n")
+    print(format_table(replay.reports))
+    print(f"\nwrote {' and '.join(str(f) for f in replay.files)}")
+    return 0
+
+
 def command_controller_design(args: argparse.Namespace) -> int:
     from altfusion.physics.controller_design import design, report
 
@@ -69,6 +110,22 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--backend", choices=("fmu", "core"), default="fmu",
                      help="step the FMUs (default) or their core objects directly")
     run.set_defaults(handler=command_run)
+    replay = commands.add_parser(
+        "replay", help="run estimators on a PX4 flight log (ULog), compare with PX4 EKF2")
+    replay.add_argument("log", type=Path, help="PX4 ULog file (.ulg)")
+    replay.add_argument("--estimators", default=",".join(CATALOG_ESTIMATORS),
+                        help="comma-separated estimator FMU names (default: %(default)s)")
+    replay.add_argument("--models", default="models", help="folder of the built FMUs")
+    replay.add_argument("--out", default="results", help="output folder (default: results)")
+    replay.add_argument("--set", action="append", default=[], metavar="COMP.PARAM=VALUE",
+                        help="override a parameter (repeatable; components: replay and the "
+                             "estimator names)")
+    replay.add_argument("--paper-tuning", action="store_true",
+                        help="run the estimators with their papers' defaults instead of the "
+                             "replay tuning")
+    replay.add_argument("--time-offset", type=float, default=0.0,
+                        help="log time replayed at simulation time 0, s")
+    replay.set_defaults(handler=command_replay)
     design = commands.add_parser("controller-design",
                                  help="print the FlightController design (poles, margins)")
     design.set_defaults(handler=command_controller_design)

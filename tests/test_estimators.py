@@ -138,6 +138,25 @@ def test_hajiyev_drift_adaptive_stays_near_gps_level_non_adaptive_diverges():
     assert abs(plain[-100:]).mean() > 300.0
 
 
+@pytest.mark.parametrize("cls", [HajiyevAdaptiveEstimator, WhangGAEstimator])
+def test_gps_before_the_first_baro_sample_is_not_fused(cls):
+    """In a replayed log GPS may arrive first (Auterion log: 3.5 ms before the baro). Fused
+    against the placeholder h_B = 0, its 429 m residual latched Hajiyev's outlier gate and
+    Whang's bias, and every later GPS sample was rejected; now it is noted and skipped."""
+    params = (WhangParams(P0_b=200.0**2, H0=429.0, R_gps=0.64, R_baro=0.36, Q_b=0.0025)
+              if cls is WhangGAEstimator else None)
+    feeder = Feeder(cls(params, step_size=0.2))
+    feeder.step(gps=429.0)
+    assert any("not fused" in n for n in feeder.estimator.take_notes())
+    for _ in range(20):
+        feeder.step(baro=275.0, gps=429.0)
+    assert feeder.estimator.n_rejected == 0
+    # Hajiyev eqs. (30), (27): S R_B = Δ² - R_GPS, so K = 1 - R_GPS/Δ² with Δ = 154 m;
+    # Whang: the bias absorbs the 154 m offset; noiseless data, so h_est -> 429 m
+    expected = 275.0 + 154.0 * (1 - 169.0 / 154.0**2) if params is None else 429.0
+    assert feeder.estimator.h_est == pytest.approx(expected, abs=0.01)
+
+
 def whang_runs(paper_sign: bool, runs: int = 6):
     """Seed 000 Section 3 on synthetic air data: our atmosphere with a random lapse-rate change
     every 10 s (σ 0.003 K/m), baro from eq. (1) + 5 m noise, ADM temperature + 1.5 K, GPS 70 m."""

@@ -38,6 +38,16 @@ RADAR = Stream("radar", ("radar_h",), "radar_valid")
 LASER = Stream("laser", ("laser_h",), "laser_valid")
 
 
+def stream_inputs(streams: tuple[Stream, ...]) -> tuple[str, ...]:
+    """The input names of ``streams`` in declaration order: values, count, validity flag."""
+    names: list[str] = []
+    for stream in streams:
+        for name in (*stream.values, stream.count, *((stream.valid,) if stream.valid else ())):
+            if name not in names:
+                names.append(name)
+    return tuple(names)
+
+
 class Estimator(Component):
     """Base of the estimators: inputs from ``streams``, outputs ``h_est``, ``vz_est``, ``h_std``.
 
@@ -64,6 +74,7 @@ class Estimator(Component):
 
     def reset(self) -> None:
         self._last_count = {s.prefix: getattr(self, s.count) for s in self.streams}
+        self._seen = {prefix for prefix, count in self._last_count.items() if count > 0}
         self.n_rejected = 0
         self.n_ignored = 0
         self.initialize_filter()
@@ -112,7 +123,13 @@ class Estimator(Component):
             self.n_ignored += 1
             self.note(f"{stream.prefix}: non-finite sample ignored {bad}")
             return None
+        self._seen.add(stream.prefix)
         return sample
+
+    def has_sample(self, prefix: str) -> bool:
+        """True once the stream ``prefix`` has delivered a valid sample (or had one at the
+        start): until then its input holds a placeholder, not a measurement."""
+        return prefix in self._seen
 
     def reject(self, stream: Stream, innovation: float, sigma: float) -> None:
         """Count and note a sample rejected by the innovation gate."""

@@ -21,7 +21,8 @@ held, and its variance grows by ``drift_psd`` per second (an addition to the pap
 ``h_std`` stays honest through GPS outages). A GPS sample whose residual jumps by more than
 ``gate_sigma`` standard deviations from the last accepted residual is rejected and logged (also
 an addition: outliers are jumps, while the drift the adaptation follows is gradual). The
-algorithm estimates no vertical speed: ``vz_est`` is always 0.
+algorithm estimates no vertical speed: ``vz_est`` is always 0. GPS samples that arrive before
+the first baro sample are not fused (eq. 18 needs h_B; in a replayed log GPS may come first).
 """
 
 from dataclasses import dataclass
@@ -79,6 +80,9 @@ class HajiyevAdaptiveEstimator(Estimator):
         if stream is BARO:
             self.baro = sample["baro_h"]
             self._publish()
+            return
+        if not self.has_sample("baro"):
+            self.note("gps: sample before the first baro sample not fused (no h_B for eq. 18)")
             return
         residual = sample["gps_h"] - self.baro                                  # (18)
         if self._accepted_residual is not None:

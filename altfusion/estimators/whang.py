@@ -18,6 +18,9 @@ makes the barometer read low, h^B - H0 ≈ (1 - ΔT/T0)(h - H0), so the scale fa
 a ≈ -ΔT/T0, opposite to eq. (3). With ``paper_lambda_sign`` false (default) the
 pseudo-measurement takes the physical sign s = -1; true restores the paper's eq. (6), s = +1.
 
+GPS samples that arrive before the first air-data sample are not fused (z needs h^B; in a
+replayed log GPS may come first).
+
 Rates: the alpha-beta filter and the random walks propagate at the estimator's own step (their
 noises, given per air-data step Δt^B, are scaled by dt/Δt^B); with the estimator stepped at
 Δt^B this is exactly the paper's filter.
@@ -105,7 +108,10 @@ class WhangGAEstimator(Estimator):
         if air_data is not None:
             self.baro = air_data["baro_h"]
             self._lambda_update(air_data["baro_T"])
-        if gps is not None:
+        if gps is not None and not self.has_sample("baro"):
+            self.note("gps: sample before the first air-data sample not fused (z = h^B - "
+                      "h^GPS needs h^B)")
+        elif gps is not None:
             self._z_update(gps["gps_h"])
         if air_data is not None:
             self._compensate()

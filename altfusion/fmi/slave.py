@@ -156,11 +156,17 @@ class CoreSlave(Fmi2Slave):
                                     f"{traceback.format_exc()}")
 
     # ----------------------------------------------------------------- life cycle
+    def core_params(self) -> Any:
+        """The parameters the core is built with: those set by the host. A slave may override
+        this to resolve host-specific values, e.g. a file path relative to ``self.resources``
+        (the FMU's resources folder)."""
+        return self._params
+
     def _rebuild_core(self) -> None:
         """Construct the core from the current parameters, keeping the inputs already set."""
         inputs = {v.name: getattr(self.core, v.name) for v in self.variables
                   if isinstance(v, Input)}
-        self.core = self.core_class(self._params, step_size=self._step_size,
+        self.core = self.core_class(self.core_params(), step_size=self._step_size,
                                     start_time=self._start_time, inputs=inputs)
 
     def setup_experiment(self, start_time: float, stop_time=None, tolerance=None) -> None:

@@ -2,6 +2,7 @@
 
 from dataclasses import dataclass
 
+from altfusion.estimators.base import stream_inputs
 from altfusion.signals import SIGNALS
 
 
@@ -41,10 +42,12 @@ def contract_input(name: str) -> Input:
     return Input(name, unit, description, type=kind)
 
 
-def contract_output(name: str, depends_on: tuple[str, ...] | None = None) -> Output:
-    """An output carrying a signal of the contract."""
-    kind, unit, description = SIGNALS[name]
-    return Output(name, unit, description, type=kind, depends_on=depends_on)
+def contract_output(name: str, depends_on: tuple[str, ...] | None = None,
+                    description: str | None = None) -> Output:
+    """An output carrying a signal of the contract; ``description`` replaces the contract's
+    where an FMU's source of the signal needs saying (a replayed log, not a sensor model)."""
+    kind, unit, meaning = SIGNALS[name]
+    return Output(name, unit, description or meaning, type=kind, depends_on=depends_on)
 
 
 def estimator_variables(streams, diagnostics: tuple[Output, ...] = ()) -> tuple:
@@ -52,10 +55,6 @@ def estimator_variables(streams, diagnostics: tuple[Output, ...] = ()) -> tuple:
 
     The estimate at the end of a step fuses the samples of that instant, so every output
     depends on every input (direct feedthrough)."""
-    names: list[str] = []
-    for stream in streams:
-        for name in (*stream.values, stream.count, *((stream.valid,) if stream.valid else ())):
-            if name not in names:
-                names.append(name)
+    names = stream_inputs(streams)
     outputs = [contract_output(n) for n in ("h_est", "vz_est", "h_std")]
     return (*(contract_input(n) for n in names), *outputs, *diagnostics)

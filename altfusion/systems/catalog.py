@@ -4,6 +4,7 @@ from collections.abc import Callable
 
 from altfusion.cosim.system import Metric, SystemSpec
 from altfusion.systems.plant import plant_components, plant_connections
+from altfusion.systems.replay import LOGS, catalog_replay
 
 
 def plant_yang2020() -> SystemSpec:
@@ -24,6 +25,7 @@ def plant_yang2020() -> SystemSpec:
 
 SYSTEMS: dict[str, Callable[[], SystemSpec]] = {
     "plant_yang2020": plant_yang2020,
+    **{name: (lambda name=name: catalog_replay(name)) for name in LOGS},
 }
 
 DEFAULT_SYSTEM = "plant_yang2020"

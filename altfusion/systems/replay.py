@@ -1,0 +1,154 @@
+"""Replay systems: LogReplay feeding estimators, each connected by contract names.
+
+An estimator gets exactly the inputs it declares, each from the LogReplay output of the same
+name; LogReplay outputs nobody declares stay unconnected, and a declared input LogReplay does
+not provide is listed by :func:`replay_system` so the caller can warn. The catalog systems
+take each estimator's declared inputs from its core class (the FMU declares the same, see
+``estimator_variables``; a system test checks them against the built FMUs); ``altfusion
+replay`` reads them from the FMUs it is given.
+
+Replay tuning (:data:`REPLAY_TUNING`): the estimators' defaults are their papers' simulation
+values (a 70 m GPS, a launch-calibrated barometer), which do not describe a PX4 vehicle. The
+replay runs them with noises from the logged sensors instead:
+
+* GPS height σ 0.8 m: the receivers' own ``epv`` (0.70-0.83 m on the Auterion flight, 0.4 m
+  in SITL once fixed);
+* baro height σ 0.6 m: the sample-to-sample scatter of ``baro_alt_meter`` on the Auterion
+  flight, std(Δh)/√2 = 0.59 m;
+* baro offset prior σ 200 m: PX4's baro altitude is referenced to its QNH setting, not to the
+  launch site, so the offset to GPS altitude is unknown up to the QNH error (±25 hPa ≈ ±200 m;
+  the Auterion log has -155 m). BaselineKF and Whang learn it as their bias state.
+* Whang's launch calibration (H0, T0) is taken at the log's start: H0 = the first valid GPS
+  altitude, T0 = the first baro temperature (:func:`launch_calibration`). With H0 = 0 (PX4's
+  QNH datum) the scale factor would act on a 430 m lever and turn the 1.5 K temperature noise
+  into ~2 m of height noise; from the start of the log it acts on the height flown. Its bias
+  random walk is (0.05 m)² per air-data step, and its alpha-beta process noise is that of a
+  multicopter, not the paper's aircraft: Q_h = q_a Δt^B = 0.5 m²/s³ x 0.2 s = 0.1 m²/s² (q_a
+  as BaselineKF's); with the paper's 39.69 m²/s² the rate state follows the baro noise
+  (±4 m/s) and coasts 4 m through the Auterion log's 2.2 s air-data gap.
+
+Hajiyev's filter has no bias state: its adaptive factor (eq. 30) sees the 155 m residual and
+turns the gain to ~1, so it follows GPS and the baro only interpolates between GPS samples.
+Estimators not listed run with their defaults.
+"""
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from altfusion.constants import ISA_T0
+from altfusion.cosim.system import ComponentSpec, Connection, SystemSpec
+from altfusion.estimators.base import stream_inputs
+from altfusion.estimators.baseline import BaselineKF
+from altfusion.estimators.hajiyev import HajiyevAdaptiveEstimator
+from altfusion.estimators.whang import WhangGAEstimator
+from altfusion.replay.component import OUTPUT_NAMES
+from altfusion.replay.extract import FlightLog
+
+REPLAY = "replay"
+"""Name of the LogReplay component in every replay system."""
+
+BASE_STEP = 0.01
+"""Step of LogReplay and of every estimator, s: finer than the fastest logged height sensor
+(20 Hz), so each baro and GPS sample reaches the estimators in a step of its own."""
+
+GPS_SIGMA, BARO_SIGMA, BARO_OFFSET_SIGMA = 0.8, 0.6, 200.0
+
+REPLAY_TUNING: dict[str, dict[str, Any]] = {
+    "BaselineKF": {"R_gps": GPS_SIGMA**2, "R_baro": BARO_SIGMA**2,
+                   "P0_b": BARO_OFFSET_SIGMA**2},
+    "HajiyevAdaptiveEstimator": {"R_gps": GPS_SIGMA**2, "R_baro": BARO_SIGMA**2},
+    "WhangGAEstimator": {"R_gps": GPS_SIGMA**2, "R_baro": BARO_SIGMA**2,
+                         "P0_b": BARO_OFFSET_SIGMA**2, "Q_b": 0.05**2, "Q_h": 0.5 * 0.2},
+}
+"""Parameters of each estimator for replayed PX4 logs (see the module docstring)."""
+
+CATALOG_ESTIMATORS = {
+    "BaselineKF": BaselineKF,
+    "HajiyevAdaptiveEstimator": HajiyevAdaptiveEstimator,
+    "WhangGAEstimator": WhangGAEstimator,
+}
+"""The estimators of the catalog replay systems, by FMU model name."""
+
+@dataclass(frozen=True)
+class CatalogLog:
+    """A bundled log (``resources/flightlogs/<file>`` of LogReplay.fmu) and what the catalog
+    system needs from it, checked against the log by the tests."""
+
+    file: str
+    stop_time: float
+    """The log's duration rounded up to the step, s."""
+    calibration: dict[str, float]
+    """:func:`launch_calibration` of the log (rounded)."""
+    description: str
+
+
+LOGS = {
+    "replay_auterion": CatalogLog(
+        "auterion_esc_status_log.ulg", 43.97, {"H0": 428.924, "T0": 299.88},
+        "Real PX4 flight (Auterion, FMU-v3): baro, GPS, accelerometer and lidar"),
+    "replay_px4_sitl": CatalogLog(
+        "pyulog_sample_px4_events.ulg", 31.14, {"H0": 488.005, "T0": 273.15},
+        "PX4 SITL take-off and landing (pyulog sample): baro, GPS, accelerometer"),
+}
+
+
+def launch_calibration(log: FlightLog) -> dict[str, float]:
+    """Whang's H0 and T0 at the log's start: the first valid GPS altitude and the first baro
+    temperature; PX4's own datum (0 m, 288.15 K) if the log has no GPS fix or no air data."""
+    gps, baro = log.stream("gps"), log.stream("baro")
+    if gps is None or baro is None or not len(baro) or gps.valid is None or not gps.valid.any():
+        return {"H0": 0.0, "T0": ISA_T0}
+    first = int(np.flatnonzero(gps.valid)[0])
+    return {"H0": float(gps.values["gps_h"][first]), "T0": float(baro.values["baro_T"][0])}
+
+
+def replay_tuning(fmu: str, calibration: dict[str, float]) -> dict[str, Any]:
+    """The replay parameters of an estimator FMU (empty for estimators not tuned here)."""
+    tuning = dict(REPLAY_TUNING.get(fmu, {}))
+    if fmu == "WhangGAEstimator":
+        tuning.update(calibration)
+    return tuning
+
+
+@dataclass(frozen=True)
+class EstimatorEntry:
+    """One estimator of a replay system: FMU model name, declared inputs, parameters."""
+
+    fmu: str
+    inputs: tuple[str, ...]
+    parameters: dict[str, Any] = field(default_factory=dict)
+
+
+def replay_system(name: str, log_file: str, stop_time: float,
+                  estimators: list[EstimatorEntry], description: str = "",
+                  time_offset: float = 0.0) -> tuple[SystemSpec, dict[str, list[str]]]:
+    """The system, and per estimator the declared inputs LogReplay does not provide."""
+    components = [ComponentSpec(REPLAY, "LogReplay", BASE_STEP,
+                                {"log_file": log_file, "time_offset": time_offset})]
+    connections, unconnected = [], {}
+    for entry in estimators:
+        components.append(ComponentSpec(entry.fmu, entry.fmu, BASE_STEP, dict(entry.parameters)))
+        for name_in in entry.inputs:
+            if name_in in OUTPUT_NAMES:
+                connections.append(Connection(f"{REPLAY}.{name_in}", f"{entry.fmu}.{name_in}"))
+            else:
+                unconnected.setdefault(entry.fmu, []).append(name_in)
+    spec = SystemSpec(name=name, description=description or f"LogReplay of {log_file}",
+                      components=tuple(components), connections=tuple(connections),
+                      stop_time=stop_time, base_step=BASE_STEP)
+    return spec, unconnected
+
+
+def catalog_replay(name: str) -> SystemSpec:
+    """A catalog replay system: a bundled log and the three catalog estimators, each with its
+    core's declared inputs and the replay tuning."""
+    log = LOGS[name]
+    entries = [EstimatorEntry(fmu, stream_inputs(core.streams),
+                              replay_tuning(fmu, log.calibration))
+               for fmu, core in CATALOG_ESTIMATORS.items()]
+    spec, _ = replay_system(name, f"flightlogs/{log.file}", log.stop_time, entries,
+                            f"{log.description}; {', '.join(CATALOG_ESTIMATORS)} with replay "
+                            f"tuning")
+    return spec

@@ -1,0 +1,142 @@
+"""Flight-log replay through fmpy: LogReplay.fmu (with its bundled logs) feeding every
+estimator FMU, on the real Auterion flight and the PX4 SITL sample."""
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from pyulog import ULog
+
+from altfusion.cli import main
+from altfusion.cosim import CosimError, read_ssp
+from altfusion.cosim.runner import Simulation
+from altfusion.replay.compare import compare_all, new_sample_rows, settle_time
+from altfusion.replay.run import declared_inputs
+from altfusion.systems.replay import CATALOG_ESTIMATORS, LOGS, REPLAY
+
+ROOT = Path(__file__).resolve().parents[1]
+MODELS = ROOT / "models"
+LOG_DIR = ROOT / "tests" / "data" / "flightlogs"
+ESTIMATORS = tuple(CATALOG_ESTIMATORS)
+TOPICS = {"baro": "vehicle_air_data", "gps": "vehicle_gps_position", "acc": "sensor_combined",
+          "laser": "distance_sensor", "ekf": "vehicle_local_position"}
+
+
+@pytest.fixture(scope="module", params=sorted(LOGS))
+def replayed(request, ssp_files):
+    """(catalog system name, its results)."""
+    loaded = read_ssp(ssp_files[request.param])
+    with Simulation(loaded.spec, loaded.fmu_paths) as simulation:
+        return request.param, simulation.run()
+
+
+def test_every_estimator_runs_to_the_end_of_the_log_with_finite_outputs(replayed):
+    name, results = replayed
+    assert results.time[-1] == LOGS[name].stop_time
+    for estimator in ESTIMATORS:
+        for output in ("h_est", "vz_est", "h_std"):
+            values = results[f"{estimator}.{output}"]
+            assert np.all(np.isfinite(values)), f"{estimator}.{output}"
+    replay_columns = [c for c in results.columns if c.startswith(f"{REPLAY}.")]
+    assert all(np.all(np.isfinite(results[c])) for c in replay_columns)
+
+
+def test_replay_counts_equal_the_samples_in_the_log(replayed):
+    """Each stream delivers every sample of its topic once: the number of distinct time stamps
+    in the file as pyulog reads it (neither log has duplicates or samples past its end; the
+    unit tests cover duplicate removal)."""
+    name, results = replayed
+    ulog = ULog(str(LOG_DIR / LOGS[name].file), list(TOPICS.values()))
+    topics = {d.name: d.data for d in ulog.data_list if d.multi_id == 0}
+    for prefix, topic in TOPICS.items():
+        expected = len(np.unique(topics[topic]["timestamp"])) if topic in topics else 0
+        assert results[f"{REPLAY}.{prefix}_count"][-1] == expected, prefix
+    assert results[f"{REPLAY}.radar_count"][-1] == 0
+
+
+def test_catalog_replay_systems_connect_exactly_the_inputs_each_fmu_declares(ssp_files, fmus):
+    for name in LOGS:
+        spec = read_ssp(ssp_files[name]).spec
+        for estimator in ESTIMATORS:
+            connected = {c.end.split(".", 1)[1] for c in spec.connections
+                         if c.end.startswith(f"{estimator}.")}
+            assert connected == set(declared_inputs(fmus[estimator])), (name, estimator)
+
+
+def test_on_the_real_flight_every_estimator_agrees_with_px4_ekf2_within_sensor_noise(ssp_files):
+    """Auterion flight, from 5 s after the first GPS fix (the offset-learning time, see
+    altfusion.replay.compare.SETTLE_TIME) to the end, at each valid EKF2 sample: d = h_est -
+    ekf_h. The bounds come from this log's sensors, measured here:
+
+    * σ_G, GPS height noise: the receiver's epv, at most 0.83 m;
+    * σ_B, baro noise: sample-to-sample scatter of baro_alt_meter, std(Δh)/√2 = 0.59 m (an
+      upper bound: Δh also holds the motion between samples).
+
+    The estimators fuse GPS as their absolute reference (BaselineKF and Whang learn the 155 m
+    baro offset in their bias states, Hajiyev's adaptive gain goes to ~1); EKF2's height
+    reference is the baro, anchored to GPS when its origin was set. So:
+
+    1. datum: mean(d) equals the log's own GPS-EKF2 datum difference mean(gps_h - ekf_h)
+       (-1.87 m) to within σ_G: the estimators follow GPS, and GPS errors over the 35 s are
+       correlated, so no better than 1 σ_G is claimed;
+    2. common datum (mean removed): std(d) <= √(σ_G² + σ_B²) = 1.02 m, the scatter of two
+       estimates each within sensor noise of the truth, one GPS-like, one baro-like;
+    3. no excursion beyond 4 √(σ_G² + σ_B²) = 4.1 m in the common datum;
+    4. no GPS sample rejected: a clean flight.
+    """
+    loaded = read_ssp(ssp_files["replay_auterion"])
+    with Simulation(loaded.spec, loaded.fmu_paths) as simulation:
+        results = simulation.run()
+    start = settle_time(results)
+    gps = new_sample_rows(results, "gps", "gps_fix")
+    gps = gps[results.time[gps] >= start]
+    sigma_g = float(np.max(results[f"{REPLAY}.gps_epv"][gps]))
+    baro = new_sample_rows(results, "baro")
+    sigma_b = float(np.std(np.diff(results[f"{REPLAY}.baro_h"][baro])) / math.sqrt(2))
+    assert sigma_g == pytest.approx(0.83, abs=0.01) and sigma_b == pytest.approx(0.59, abs=0.01)
+    datum = float(np.mean(results[f"{REPLAY}.gps_h"][gps] - results[f"{REPLAY}.ekf_h"][gps]))
+    bound = math.hypot(sigma_g, sigma_b)
+    ekf = new_sample_rows(results, "ekf", "ekf_valid")
+    ekf = ekf[results.time[ekf] >= start]
+    for report in compare_all(results, list(ESTIMATORS), start)[1:]:
+        d = results[f"{report.name}.h_est"][ekf] - results[f"{REPLAY}.ekf_h"][ekf]
+        assert len(d) == report.vs_ekf.n > 250  # 34.6 s of EKF2 at ~9.6 Hz
+        assert abs(d.mean() - datum) <= sigma_g, report.name
+        assert d.std() <= bound, report.name
+        assert np.max(np.abs(d - d.mean())) <= 4 * bound, report.name
+        assert report.rejected == 0, report.name
+
+
+def test_altfusion_replay_prints_the_comparison_and_writes_csv_and_plot(fmus, tmp_path, capsys):
+    log = LOG_DIR / LOGS["replay_px4_sitl"].file
+    assert main(["replay", str(log), "--models", str(MODELS), "--out", str(tmp_path),
+                 "--estimators", "BaselineKF,WhangGAEstimator",
+                 "--set", "BaselineKF.R_gps=1.0"]) == 0
+    out = capsys.readouterr().out
+    assert "samples delivered: baro 623 of 623, gps 583 of 583, acc 7783 of 7783" in out
+    assert "distance_sensor: missing topic" in out
+    table = [line for line in out.splitlines() if line.startswith(("BaselineKF", "Whang"))]
+    assert len(table) == 2
+    stem = "replay_pyulog_sample_px4_events"
+    assert (tmp_path / f"{stem}.png").stat().st_size > 10_000
+    header = (tmp_path / f"{stem}.csv").read_text().splitlines()[0]
+    assert "BaselineKF.h_est [m]" in header and "replay.ekf_h [m]" in header
+
+
+def test_altfusion_replay_refuses_a_missing_log_or_an_unknown_estimator(fmus, tmp_path, capsys):
+    assert main(["replay", str(tmp_path / "absent.ulg"), "--models", str(MODELS)]) == 2
+    assert "no such file" in capsys.readouterr().err
+    log = LOG_DIR / LOGS["replay_px4_sitl"].file
+    assert main(["replay", str(log), "--models", str(MODELS), "--estimators", "NoSuchKF"]) == 2
+    assert "no FMU for NoSuchKF" in capsys.readouterr().err
+
+
+def test_a_log_file_that_is_not_there_fails_initialization_naming_log_file(fmus):
+    from altfusion.cosim import ComponentSpec, SystemSpec, simulate
+
+    system = SystemSpec("bad_log", "LogReplay of a missing file",
+                        (ComponentSpec(REPLAY, "LogReplay", 0.01,
+                                       {"log_file": "flightlogs/absent.ulg"}),), (), 1.0)
+    with pytest.raises(CosimError, match=r"'log_file' = 'flightlogs/absent.ulg': .*no such"):
+        simulate(system, fmus)
