@@ -8,6 +8,7 @@ from typing import Any
 from altfusion.cosim.instances import PY_TYPES, CosimError, fmu_info
 from altfusion.cosim.runner import Simulation
 from altfusion.cosim.ssp import LoadedSystem, read_ssp
+from altfusion.montecarlo.commands import add_commands as add_montecarlo_commands
 
 
 def parse_settings(loaded: LoadedSystem, settings: list[str]) -> dict[str, Any]:
@@ -72,6 +73,7 @@ def build_parser() -> argparse.ArgumentParser:
     design = commands.add_parser("controller-design",
                                  help="print the FlightController design (poles, margins)")
     design.set_defaults(handler=command_controller_design)
+    add_montecarlo_commands(commands)
     return parser
 
 

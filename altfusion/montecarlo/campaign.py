@@ -94,16 +94,23 @@ def build_manifest(task: CampaignTask, prepared: PreparedSystem, runs: int) -> d
     return json.loads(json.dumps(manifest))
 
 
-def check_resumable(stored: dict[str, Any], new: dict[str, Any]) -> None:
-    """Refuse to add runs to a campaign that was started with another system or settings."""
+def check_same_campaign(stored: dict[str, Any], new: dict[str, Any]) -> None:
+    """Refuse a manifest of another system or other settings than ``new``."""
     if stored.get("format") != MANIFEST_FORMAT:
         raise CampaignError(f"manifest format {stored.get('format')!r} is not "
                             f"{MANIFEST_FORMAT}")
     differences = [f"{key}: campaign has {stored.get(key)!r}, now {new[key]!r}"
                    for key in IDENTITY if stored.get(key) != new[key]]
     if differences:
-        raise CampaignError("cannot resume: this is not the same campaign\n  "
-                            + "\n  ".join(differences))
+        raise CampaignError("not the same campaign:\n  " + "\n  ".join(differences))
+
+
+def check_resumable(stored: dict[str, Any], new: dict[str, Any]) -> None:
+    """Refuse to add runs to a campaign that was started with another system or settings."""
+    try:
+        check_same_campaign(stored, new)
+    except CampaignError as error:
+        raise CampaignError(f"cannot resume: {error}") from None
     if new["runs"] < stored["runs"]:
         raise CampaignError(f"cannot resume with -n {new['runs']}: the campaign has "
                             f"{stored['runs']} runs (resume without -n, or with more runs)")

@@ -101,9 +101,11 @@ def prepare_campaign(source: SystemSource, out: Path, settings: CampaignSettings
 
 
 def run_campaign(source: SystemSource, out: Path, settings: CampaignSettings,
-                 execution: Execution = Execution(), resume: bool = False) -> CampaignOutcome:
+                 execution: Execution | None = None, resume: bool = False,
+                 ) -> CampaignOutcome:
     """Run (or, with ``resume``, complete) the campaign of ``source`` in folder ``out``."""
     out = Path(out)
+    execution = execution or Execution()
     task, manifest = prepare_campaign(source, out, settings, resume)
     runs = manifest["runs"]
     done = set(finished_runs(out))
