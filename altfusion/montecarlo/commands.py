@@ -36,8 +36,8 @@ def _execution(args: argparse.Namespace):
 def _report_outcome(outcome, resume_hint: str) -> int:
     """Print what a campaign session did; the exit status."""
     print(f"{len(outcome.finished)}/{outcome.runs} runs finished in {outcome.out} "
-          f"({outcome.executed} run now on {outcome.backend or 'no workers'}, "
-          f"{outcome.elapsed:.1f} s)")
+          f"({outcome.executed} executed in this session on "
+          f"{outcome.backend or 'no workers'}, {outcome.elapsed:.1f} s)")
     for index, message in list(sorted(outcome.failed.items()))[:SHOWN_FAILURES]:
         print(f"run {index} failed: {message.splitlines()[0] if message else ''}",
               file=sys.stderr)

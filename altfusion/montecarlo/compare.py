@@ -9,6 +9,7 @@ campaign lives in ``OUT/<estimator>/`` (resumable and reportable on its own);
 
 import json
 import re
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -73,7 +74,7 @@ def run_comparison(ssp: Path, estimators: list[str], out: Path, settings: Campai
     outcomes = []
     for contender in contenders(ssp, estimators):
         if execution.progress:
-            print(f"{contender.name}:", flush=True)
+            print(f"{contender.name}:", file=sys.stderr, flush=True)
         outcome = run_campaign(contender.source, Path(out) / contender.folder, settings,
                                execution, resume)
         outcomes.append((contender, outcome))
