@@ -101,7 +101,6 @@ def open_backend(task: CampaignTask, workers: int | None, scheduler: str | None,
     Dask cluster at ``scheduler``."""
     if scheduler:
         return DaskCluster(scheduler)
-    count = workers or available_cores()
-    if count < 1:
-        raise CampaignError(f"--workers must be >= 1, got {count}")
-    return LocalWorkers(task, max(1, min(count, runs)))
+    if workers is not None and workers < 1:
+        raise CampaignError(f"--workers must be >= 1, got {workers}")
+    return LocalWorkers(task, min(workers or available_cores(), runs))

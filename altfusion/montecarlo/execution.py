@@ -40,7 +40,9 @@ class CampaignSettings:
     def resolved(self, stored: dict[str, Any] | None) -> "CampaignSettings":
         stored = stored or {}
         runs = self.runs if self.runs is not None else stored.get("runs")
-        if runs is None or runs < 1:
+        if runs is None:
+            raise CampaignError("a new campaign needs its number of runs (-n N)")
+        if runs < 1:
             raise CampaignError(f"the number of runs must be >= 1, got {runs}")
         return CampaignSettings(
             runs,
@@ -128,8 +130,8 @@ def _describe(error: BaseException) -> str:
 
 def _execute(task: CampaignTask, out: Path, todo: list[int], outcome: CampaignOutcome,
              execution: Execution) -> CampaignOutcome:
-    progress = Progress(outcome.runs, outcome.runs - len(todo), enabled=execution.progress)
     backend = open_backend(task, execution.workers, execution.scheduler, len(todo))
+    progress = Progress(outcome.runs, outcome.runs - len(todo), enabled=execution.progress)
     stopped, executed, succeeded, failures, clean = None, 0, 0, 0, False
     try:
         futures = {}
