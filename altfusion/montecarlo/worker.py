@@ -4,10 +4,15 @@ every run through ``reset`` (pythonfmu leaks memory on every instantiation).
 The cache is module-level, so the same functions serve local worker processes (created with
 the "spawn" start method; the initializer warms the cache) and Dask workers (the first task
 of a campaign on a worker fills it). Nothing here forks.
+
+A Dask worker may run several tasks at once in threads; a Simulation is not thread-safe and
+every FMU runs Python code under the host's GIL, so runs in one process are serialized by a
+lock (start Dask workers with one thread each and one worker process per core).
 """
 
 import contextlib
 import signal
+import threading
 import time
 
 from altfusion.cosim.runner import Simulation
@@ -17,6 +22,7 @@ from altfusion.montecarlo.storage import RunRecord, resident_memory, worker_name
 
 _SIMULATIONS: dict[tuple, tuple[PreparedSystem, Simulation]] = {}
 _FAILURES: dict[tuple, Exception] = {}
+_LOCK = threading.Lock()
 
 
 def simulation_for(source: SystemSource) -> Simulation:
@@ -52,10 +58,11 @@ def initialize_worker(source: SystemSource) -> None:
 
 def execute_run(task: CampaignTask, index: int) -> RunRecord:
     """Run ``index`` of the campaign: the same numbers wherever and whenever it runs."""
-    simulation = simulation_for(task.source)
     seeds = task.seeds(index)
-    start = time.perf_counter()
-    results = simulation.run(stop_time=task.stop_time,
-                             parameters={**dict(task.parameters), **seeds})
-    elapsed = time.perf_counter() - start
+    with _LOCK:
+        simulation = simulation_for(task.source)
+        start = time.perf_counter()
+        results = simulation.run(stop_time=task.stop_time,
+                                 parameters={**dict(task.parameters), **seeds})
+        elapsed = time.perf_counter() - start
     return RunRecord(index, seeds, results, elapsed, worker_name(), resident_memory())
