@@ -189,6 +189,17 @@ def test_resume_refuses_another_seed_and_a_new_campaign_refuses_an_occupied_fold
                      resume=True)
 
 
+def test_a_system_that_fails_every_run_stops_after_three_with_the_fmu_message(gusty_ssp,
+                                                                              tmp_path):
+    outcome = run_campaign(SystemSource.from_path(gusty_ssp), tmp_path,
+                           CampaignSettings(RUNS, parameters={"plant.mass": -1.0}),
+                           Execution(workers=1, progress=False))
+    assert outcome.failing and not outcome.finished
+    assert sorted(outcome.failed) == [0, 1, 2]
+    assert "component 'plant'" in outcome.failed[0]
+    assert "parameter 'mass' = -1.0: must be > 0" in outcome.stopped
+
+
 def colored_fraction(png: Path) -> float:
     """Fraction of pixels that are neither white nor grey (plotted data, not axes)."""
     pixels = matplotlib.image.imread(png)[..., :3]

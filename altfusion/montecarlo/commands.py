@@ -33,18 +33,26 @@ def _execution(args: argparse.Namespace):
     return Execution(args.workers, args.scheduler, progress=not args.quiet)
 
 
+def _headline(message: str) -> str:
+    """The informative line of a stored failure: the error line after a traceback, else the
+    first line (a CosimError names the component first)."""
+    lines = [line for line in message.splitlines() if line.strip()] or [""]
+    return lines[-1] if lines[0].startswith("Traceback") else lines[0]
+
+
 def _report_outcome(outcome, resume_hint: str) -> int:
     """Print what a campaign session did; the exit status."""
     print(f"{len(outcome.finished)}/{outcome.runs} runs finished in {outcome.out} "
           f"({outcome.executed} executed in this session on "
           f"{outcome.backend or 'no workers'}, {outcome.elapsed:.1f} s)")
     for index, message in list(sorted(outcome.failed.items()))[:SHOWN_FAILURES]:
-        print(f"run {index} failed: {message.splitlines()[0] if message else ''}",
-              file=sys.stderr)
+        print(f"run {index} failed: {_headline(message)}", file=sys.stderr)
     if len(outcome.failed) > SHOWN_FAILURES:
         print(f"... {len(outcome.failed)} failed runs in all ({outcome.out}/runs/*.failed.txt)",
               file=sys.stderr)
-    if outcome.stopped:
+    if outcome.failing:
+        print(f"stopped: {outcome.stopped}", file=sys.stderr)
+    elif outcome.stopped:
         print(f"stopped: {outcome.stopped}. Finished runs are kept; {resume_hint} "
               f"completes the campaign.", file=sys.stderr)
         return INTERRUPTED if outcome.stopped == "interrupted" else 1

@@ -9,6 +9,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+from altfusion.cosim.instances import CosimError
 from altfusion.montecarlo.backends import open_backend
 from altfusion.montecarlo.campaign import CampaignTask, build_manifest, check_resumable, plan
 from altfusion.montecarlo.progress import Progress
@@ -74,6 +75,8 @@ class CampaignOutcome:
     backend: str = ""
     stopped: str | None = None
     """Why the session stopped early (None: it ran every missing run)."""
+    failing: bool = False
+    """It stopped because the system fails (resuming unchanged would fail again)."""
     missing: list[int] = field(default_factory=list)
 
     @property
@@ -124,8 +127,11 @@ def run_campaign(source: SystemSource, out: Path, settings: CampaignSettings,
 
 
 def _describe(error: BaseException) -> str:
-    text = "".join(traceback.format_exception_only(type(error), error)).strip()
-    return text.removeprefix("altfusion.cosim.instances.CosimError: ")
+    """The error message; for errors other than CosimError (which carry the FMU's message and
+    traceback already) followed by the traceback, the worker's one included."""
+    if isinstance(error, CosimError):
+        return str(error)
+    return "".join(traceback.format_exception(error)).strip()
 
 
 def _execute(task: CampaignTask, out: Path, todo: list[int], outcome: CampaignOutcome,
@@ -151,7 +157,9 @@ def _execute(task: CampaignTask, out: Path, todo: list[int], outcome: CampaignOu
                 write_failure(out, index, _describe(error))
                 progress.advance(failed=True)
                 if not succeeded and failures >= FAIL_FAST:
-                    stopped = f"the first {failures} runs failed: {_describe(error)}"
+                    stopped = (f"the first {failures} runs failed: "
+                               f"{_describe(error).splitlines()[-1]}")
+                    outcome = replace(outcome, failing=True)
                     break
                 continue
             write_run(out, record)
