@@ -121,7 +121,7 @@ def throughput(runs: int, stop: float) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--runs", type=int, default=200)
+    parser.add_argument("--runs", type=int, default=200, help="memory runs; 0: skip")
     parser.add_argument("--batch", type=int, default=20)
     parser.add_argument("--stop", type=float, default=60.0, help="simulated time per run, s")
     parser.add_argument("--contrast", type=int, default=0, metavar="N")
@@ -130,7 +130,8 @@ def main() -> None:
     print(f"# altfusion Monte Carlo benchmark, {time.strftime('%Y-%m-%d')}, "
           f"{platform.node()}, {platform.processor() or platform.machine()}, "
           f"Python {platform.python_version()}")
-    memory(args.runs, args.batch, args.stop)
+    if args.runs:
+        memory(args.runs, args.batch, args.stop)
     if args.contrast:
         contrast(args.contrast, args.stop)
     if args.throughput_runs:
