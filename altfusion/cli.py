@@ -8,6 +8,7 @@ from typing import Any
 from altfusion.cosim.instances import PY_TYPES, CosimError, fmu_info
 from altfusion.cosim.runner import Simulation
 from altfusion.cosim.ssp import LoadedSystem, read_ssp
+from altfusion.montecarlo.commands import add_commands as add_montecarlo_commands
 from altfusion.systems.replay import CATALOG_ESTIMATORS
 
 
@@ -129,6 +130,7 @@ def build_parser() -> argparse.ArgumentParser:
     design = commands.add_parser("controller-design",
                                  help="print the FlightController design (poles, margins)")
     design.set_defaults(handler=command_controller_design)
+    add_montecarlo_commands(commands)
     return parser
 
 

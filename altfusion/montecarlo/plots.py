@@ -1,0 +1,133 @@
+"""Plots of campaign statistics (matplotlib, no display needed); each returns the PNG path."""
+
+from collections.abc import Callable
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+from altfusion.montecarlo.aggregation import (  # noqa: E402
+    CampaignStatistics,
+    MetricStatistics,
+    SignalEnvelope,
+)
+
+MAX_PANELS = 6
+DPI = 110
+
+
+def _by_unit(items: list, unit: Callable) -> dict[str, list]:
+    groups: dict[str, list] = {}
+    for item in items:
+        groups.setdefault(unit(item), []).append(item)
+    return dict(list(groups.items())[:MAX_PANELS])
+
+
+def _save(fig, path: Path) -> Path:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.tight_layout()
+    fig.savefig(path, dpi=DPI)
+    plt.close(fig)
+    return path
+
+
+def _panels(count: int, height: float = 2.4):
+    fig, axes = plt.subplots(count, 1, sharex=True, figsize=(9, height * count + 0.8),
+                             squeeze=False)
+    return fig, axes[:, 0]
+
+
+def _subtitle(statistics: CampaignStatistics, bands: bool = True) -> str:
+    text = f"{statistics.manifest['system']['name']}: {len(statistics.runs)} runs"
+    return text + (f", {100 * statistics.confidence:g} % confidence bands" if bands else "")
+
+
+def plot_rms_versus_time(statistics: CampaignStatistics, path: Path,
+                         series: list[tuple[str, MetricStatistics]] | None = None) -> Path:
+    """RMS error over runs versus time, one panel per unit, chi-square band (seed 000 Fig. 3).
+
+    ``series`` (label, metric statistics) overrides the campaign's own metrics, e.g. to
+    overlay several estimators.
+    """
+    series = series or [(m.metric.name, m) for m in statistics.metrics]
+    groups = _by_unit(series, lambda item: item[1].unit)
+    fig, axes = _panels(len(groups))
+    for ax, (unit, items) in zip(axes, groups.items(), strict=True):
+        for label, metric in items:
+            line, = ax.plot(statistics.time, metric.profile.rms, linewidth=1.2, label=label)
+            ax.fill_between(statistics.time, metric.profile.rms_low, metric.profile.rms_high,
+                            color=line.get_color(), alpha=0.2, linewidth=0)
+        ax.set_ylabel(f"RMS error [{unit}]" if unit else "RMS error")
+        ax.set_ylim(bottom=0)
+        ax.grid(True, alpha=0.3)
+        ax.legend(loc="best", fontsize=8)
+    axes[-1].set_xlabel("time [s]")
+    fig.suptitle(f"RMS error versus time - {_subtitle(statistics)}", fontsize=9)
+    return _save(fig, path)
+
+
+def plot_mean_error_versus_time(statistics: CampaignStatistics, path: Path) -> Path:
+    """Mean error over runs versus time with its t band, one panel per unit."""
+    groups = _by_unit(statistics.metrics, lambda m: m.unit)
+    fig, axes = _panels(len(groups))
+    for ax, (unit, metrics) in zip(axes, groups.items(), strict=True):
+        for metric in metrics:
+            profile = metric.profile
+            line, = ax.plot(statistics.time, profile.mean, linewidth=1.2,
+                            label=metric.metric.name)
+            if profile.mean_low is not None:
+                ax.fill_between(statistics.time, profile.mean_low, profile.mean_high,
+                                color=line.get_color(), alpha=0.2, linewidth=0)
+        ax.axhline(0.0, color="black", linewidth=0.6)
+        ax.set_ylabel(f"mean error [{unit}]" if unit else "mean error")
+        ax.grid(True, alpha=0.3)
+        ax.legend(loc="best", fontsize=8)
+    axes[-1].set_xlabel("time [s]")
+    fig.suptitle(f"Mean error versus time - {_subtitle(statistics)}", fontsize=9)
+    return _save(fig, path)
+
+
+def plot_run_rms_histograms(statistics: CampaignStatistics, path: Path) -> Path:
+    """Histogram of the per-run RMS error of each metric."""
+    metrics = statistics.metrics[:MAX_PANELS]
+    fig, axes = plt.subplots(1, len(metrics), figsize=(3.6 * len(metrics) + 0.6, 3.2),
+                             squeeze=False)
+    for ax, metric in zip(axes[0], metrics, strict=True):
+        bins = max(5, min(40, int(round(2 * len(metric.run_rms) ** (1 / 3)))))
+        ax.hist(metric.run_rms, bins=bins, color="tab:blue", alpha=0.8)
+        ax.axvline(metric.rms, color="black", linewidth=1, label=f"overall {metric.rms:.3g}")
+        ax.set_xlabel(f"run RMS error [{metric.unit}]" if metric.unit else "run RMS error")
+        ax.set_ylabel("runs")
+        ax.yaxis.get_major_locator().set_params(integer=True)
+        ax.set_title(metric.metric.name, fontsize=9)
+        ax.legend(fontsize=7)
+    fig.suptitle(f"Per-run RMS error - {_subtitle(statistics, bands=False)}", fontsize=9)
+    return _save(fig, path)
+
+
+def plot_signal_envelopes(statistics: CampaignStatistics, path: Path) -> Path:
+    """Each recorded signal over runs: mean, ±σ band and min-max range, one panel per unit."""
+    groups = _by_unit(statistics.signals, lambda s: s.unit)
+    fig, axes = _panels(len(groups), height=2.2)
+    for ax, (unit, signals) in zip(axes, groups.items(), strict=True):
+        for signal in signals:
+            _envelope(ax, statistics, signal)
+        ax.set_ylabel(f"[{unit}]" if unit else "")
+        ax.grid(True, alpha=0.3)
+        ax.legend(loc="best", fontsize=7)
+    axes[-1].set_xlabel("time [s]")
+    fig.suptitle(f"Recorded signals: mean, ±σ, min-max - {_subtitle(statistics, bands=False)}",
+                 fontsize=9)
+    return _save(fig, path)
+
+
+def _envelope(ax, statistics: CampaignStatistics, signal: SignalEnvelope) -> None:
+    line, = ax.plot(statistics.time, signal.mean, linewidth=1, label=signal.name)
+    color = line.get_color()
+    ax.fill_between(statistics.time, signal.mean - signal.std, signal.mean + signal.std,
+                    color=color, alpha=0.25, linewidth=0)
+    ax.fill_between(statistics.time, signal.minimum, signal.maximum, color=color, alpha=0.1,
+                    linewidth=0)

@@ -1,0 +1,68 @@
+"""What runs inside a worker process: one cached :class:`Simulation` per system, reused for
+every run through ``reset`` (pythonfmu leaks memory on every instantiation).
+
+The cache is module-level, so the same functions serve local worker processes (created with
+the "spawn" start method; the initializer warms the cache) and Dask workers (the first task
+of a campaign on a worker fills it). Nothing here forks.
+
+A Dask worker may run several tasks at once in threads; a Simulation is not thread-safe and
+every FMU runs Python code under the host's GIL, so runs in one process are serialized by a
+lock (start Dask workers with one thread each and one worker process per core).
+"""
+
+import contextlib
+import signal
+import threading
+import time
+
+from altfusion.cosim.runner import Simulation
+from altfusion.montecarlo.campaign import CampaignTask
+from altfusion.montecarlo.source import PreparedSystem, SystemSource, load_system
+from altfusion.montecarlo.storage import RunRecord, resident_memory, worker_name
+
+_SIMULATIONS: dict[tuple, tuple[PreparedSystem, Simulation]] = {}
+_FAILURES: dict[tuple, Exception] = {}
+_LOCK = threading.Lock()
+
+
+def simulation_for(source: SystemSource) -> Simulation:
+    """This process's simulation of ``source``, created on first use and kept.
+
+    If creating it failed (e.g. FMUs built from another core), every later call raises the
+    same error instead of instantiating the FMUs again.
+    """
+    if source.key in _FAILURES:
+        raise _FAILURES[source.key].with_traceback(None)
+    cached = _SIMULATIONS.get(source.key)
+    if cached is None:
+        try:
+            prepared = load_system(source)
+            cached = (prepared, Simulation(prepared.spec, prepared.fmu_paths))
+        except Exception as error:
+            _FAILURES[source.key] = error
+            raise
+        _SIMULATIONS[source.key] = cached
+    return cached[1]
+
+
+def initialize_worker(source: SystemSource) -> None:
+    """Initializer of local worker processes: build the simulation before the first run.
+
+    Workers ignore Ctrl-C: the parent process decides what happens to an interrupted
+    campaign (it keeps every finished run and stops the workers).
+    """
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    with contextlib.suppress(Exception):  # each run of this worker reports the error
+        simulation_for(source)
+
+
+def execute_run(task: CampaignTask, index: int) -> RunRecord:
+    """Run ``index`` of the campaign: the same numbers wherever and whenever it runs."""
+    seeds = task.seeds(index)
+    with _LOCK:
+        simulation = simulation_for(task.source)
+        start = time.perf_counter()
+        results = simulation.run(stop_time=task.stop_time,
+                                 parameters={**dict(task.parameters), **seeds})
+        elapsed = time.perf_counter() - start
+    return RunRecord(index, seeds, results, elapsed, worker_name(), resident_memory())

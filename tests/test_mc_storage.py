@@ -1,0 +1,65 @@
+"""Campaign storage: runs round-trip exactly, writes are atomic, leftovers are ignored."""
+
+import numpy as np
+import pytest
+
+from altfusion.cosim.results import Results
+from altfusion.montecarlo.storage import (
+    RunRecord,
+    atomic_write,
+    failed_runs,
+    finished_runs,
+    read_run,
+    run_path,
+    write_failure,
+    write_run,
+)
+
+
+def record(index: int, scale: float = 1.0) -> RunRecord:
+    time = np.arange(5) * 0.1
+    columns = {"plant.h": scale * np.sin(time), "gnss.gps_count": np.arange(5.0)}
+    return RunRecord(index, {"gnss.seed": 12345 + index},
+                     Results(time, columns, {"plant.h": "m", "gnss.gps_count": ""}),
+                     elapsed=0.25, worker="1@host", worker_rss=1 << 20)
+
+
+def test_a_run_round_trips_bit_for_bit(tmp_path):
+    original = record(3, scale=np.pi)
+    write_run(tmp_path, original)
+    loaded = read_run(tmp_path, 3)
+    assert loaded.seeds == original.seeds
+    assert list(loaded.results.columns) == ["plant.h", "gnss.gps_count"]
+    assert loaded.results.units == original.results.units
+    assert np.array_equal(loaded.results.time, original.results.time)
+    for name in original.results.columns:
+        assert np.array_equal(loaded.results[name], original.results[name])
+    assert (loaded.elapsed, loaded.worker, loaded.worker_rss) == (0.25, "1@host", 1 << 20)
+
+
+def test_leftover_temporary_files_are_not_finished_runs(tmp_path):
+    write_run(tmp_path, record(0))
+    write_run(tmp_path, record(2))
+    (run_path(tmp_path, 1).parent / ".run_00001.npz.abc.tmp").write_bytes(b"partial")
+    write_failure(tmp_path, 4, "component 'gnss': boom")
+    assert finished_runs(tmp_path) == [0, 2]
+    assert failed_runs(tmp_path) == {4: "component 'gnss': boom"}
+
+
+def test_a_successful_retry_clears_the_failure(tmp_path):
+    write_failure(tmp_path, 1, "boom")
+    write_run(tmp_path, record(1))
+    assert failed_runs(tmp_path) == {}
+    assert finished_runs(tmp_path) == [1]
+
+
+def test_an_interrupted_write_leaves_neither_the_file_nor_a_temporary(tmp_path):
+    target = tmp_path / "runs" / "run_00000.npz"
+
+    def interrupted(handle):
+        handle.write(b"half a file")
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        atomic_write(target, interrupted)
+    assert list((tmp_path / "runs").iterdir()) == []
