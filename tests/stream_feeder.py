@@ -3,8 +3,8 @@
 
 class StreamFeeder:
     """``step(baro={"baro_h": ...}, gps=None, inputs={"wind_speed": ...})`` delivers one new
-    sample of each stream given (count + 1, time stamp = the end of the step), sets the extra
-    inputs, and advances the estimator by one step."""
+    sample of each stream given (count + 1, time stamp = the end of the step unless the sample
+    gives its own), sets the extra inputs, and advances the estimator by one step."""
 
     def __init__(self, estimator):
         self.estimator = estimator
@@ -23,7 +23,7 @@ class StreamFeeder:
             for name, value in values.items():
                 setattr(e, name, value)
             setattr(e, f"{prefix}_count", self.counts[prefix])
-            if hasattr(e, f"{prefix}_time"):
+            if hasattr(e, f"{prefix}_time") and f"{prefix}_time" not in values:
                 setattr(e, f"{prefix}_time", t_end)
         e.do_step(e.clock.time(self.n), e.dt)
         self.n += 1
