@@ -156,6 +156,21 @@ def test_a_height_sample_far_from_the_prediction_is_rejected_and_noted():
     assert estimator.h_est == pytest.approx(300.0, abs=5.0)
 
 
+def test_samples_without_time_stamps_are_noted_once_and_cannot_fuse():
+    """A radar whose radar_time input is left unconnected (0): its samples are too old to
+    take part; one note says why, and the fusion goes on with the live sensors."""
+    estimator = YangFusionKF(step_size=0.01)
+    feeder = StreamFeeder(estimator)
+    for k in range(300):
+        samples = {"baro": {"baro_h": 300.0}}
+        if (k + 1) % 20 == 0:
+            samples["radar"] = {"radar_h": 300.0, "radar_time": 0.0}
+        feeder.step(**samples)
+    notes = [n for n in estimator.take_notes() if "radar_time" in n]
+    assert len(notes) == 1
+    assert estimator.weight_radar == 0.0 and estimator.weight_baro == 1.0
+
+
 @pytest.mark.parametrize(("params", "name"), [
     (YangParams(R_radar=0.0), "R_radar"),
     (YangParams(jerk_psd=0.0), "jerk_psd"),
