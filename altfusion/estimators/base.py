@@ -5,6 +5,11 @@ A sensor stream is a group of inputs named by the signal contract: the held samp
 measurement update happens exactly once per new sample, i.e. when the count changes, whatever
 the estimator's own step; the time update runs at every step. A sample that is invalid or
 not finite is ignored and noted (logged by the FMU), so nothing propagates into the state.
+An estimator that needs the sample's time stamp uses the stream's :meth:`Stream.timed`
+variant, whose samples carry ``<prefix>_time`` like any other value.
+
+Inputs outside any stream (``extra_inputs``, e.g. ``wind_speed``) have no count: they are read
+with :meth:`Estimator.held_input`, which holds the last finite value over non-finite ones.
 """
 
 import math
@@ -27,15 +32,29 @@ class Stream:
     def count(self) -> str:
         return f"{self.prefix}_count"
 
+    @property
+    def time(self) -> str:
+        return f"{self.prefix}_time"
+
+    def timed(self) -> "Stream":
+        """This stream with the sample's time stamp ``<prefix>_time`` (s) among its values."""
+        if self.time in self.values:
+            return self
+        return Stream(self.prefix, (*self.values, self.time), self.valid)
+
 
 BARO = Stream("baro", ("baro_h",))
 BARO_T = Stream("baro", ("baro_h", "baro_T"))
+BARO_P = Stream("baro", ("baro_h", "baro_p"))
 GPS = Stream("gps", ("gps_h",), "gps_fix")
 GPS_QUALITY = Stream("gps", ("gps_h", "gps_vdop", "gps_nsat"), "gps_fix")
 GPS_VZ = Stream("gps", ("gps_h", "gps_vz"), "gps_fix")
 ACC = Stream("acc", ("acc_z",))
 RADAR = Stream("radar", ("radar_h",), "radar_valid")
 LASER = Stream("laser", ("laser_h",), "laser_valid")
+BARO_TIMED = BARO.timed()
+GPS_VZ_TIMED = GPS_VZ.timed()
+RADAR_TIMED = RADAR.timed()
 
 
 def stream_inputs(streams: tuple[Stream, ...]) -> tuple[str, ...]:
@@ -57,8 +76,12 @@ class Estimator(Component):
     """
 
     streams: ClassVar[tuple[Stream, ...]]
+    extra_inputs: ClassVar[tuple[str, ...]] = ()
+    """Real inputs outside any stream (no count), read with :meth:`held_input`."""
 
     def __init__(self, params=None, **kwargs):
+        for name in self.extra_inputs:
+            setattr(self, name, 0.0)
         for stream in self.streams:
             for name in stream.values:
                 setattr(self, name, 0.0)
@@ -77,6 +100,11 @@ class Estimator(Component):
         self._seen = {prefix for prefix, count in self._last_count.items() if count > 0}
         self.n_rejected = 0
         self.n_ignored = 0
+        self._held_inputs: dict[str, float] = {}
+        self._bad_inputs: set[str] = set()
+        for name in self.extra_inputs:
+            value = float(getattr(self, name))
+            self._held_inputs[name] = value if math.isfinite(value) else 0.0
         self.initialize_filter()
 
     @abstractmethod
@@ -130,6 +158,28 @@ class Estimator(Component):
         """True once the stream ``prefix`` has delivered a valid sample (or had one at the
         start): until then its input holds a placeholder, not a measurement."""
         return prefix in self._seen
+
+    @classmethod
+    def declared_inputs(cls) -> tuple[str, ...]:
+        """Every input of the estimator: its streams' inputs, then its extra inputs."""
+        names = stream_inputs(cls.streams)
+        return names + tuple(n for n in cls.extra_inputs if n not in names)
+
+    def held_input(self, name: str) -> float:
+        """The extra input ``name``, or its last finite value if it is not finite now.
+
+        A non-finite value counts in ``n_ignored``; the first of a run of them is noted."""
+        value = float(getattr(self, name))
+        held = self._held_inputs[name]
+        if math.isfinite(value):
+            self._held_inputs[name] = value
+            self._bad_inputs.discard(name)
+            return value
+        self.n_ignored += 1
+        if name not in self._bad_inputs:
+            self._bad_inputs.add(name)
+            self.note(f"{name}: non-finite sample ignored ({value}); holding {held!r}")
+        return held
 
     def reject(self, stream: Stream, innovation: float, sigma: float) -> None:
         """Count and note a sample rejected by the innovation gate."""

@@ -50,11 +50,14 @@ def contract_output(name: str, depends_on: tuple[str, ...] | None = None,
     return Output(name, unit, description or meaning, type=kind, depends_on=depends_on)
 
 
-def estimator_variables(streams, diagnostics: tuple[Output, ...] = ()) -> tuple:
-    """Inputs of an estimator's sensor streams, then h_est, vz_est, h_std and diagnostics.
+def estimator_variables(streams, diagnostics: tuple[Output, ...] = (),
+                        extra_inputs: tuple[str, ...] = ()) -> tuple:
+    """Inputs of an estimator's sensor streams and its extra (stream-less) contract inputs,
+    then h_est, vz_est, h_std and diagnostics.
 
     The estimate at the end of a step fuses the samples of that instant, so every output
     depends on every input (direct feedthrough)."""
-    names = stream_inputs(streams)
+    names = list(stream_inputs(streams))
+    names += [name for name in extra_inputs if name not in names]
     outputs = [contract_output(n) for n in ("h_est", "vz_est", "h_std")]
     return (*(contract_input(n) for n in names), *outputs, *diagnostics)

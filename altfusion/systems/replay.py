@@ -39,7 +39,6 @@ import numpy as np
 
 from altfusion.constants import ISA_T0
 from altfusion.cosim.system import ComponentSpec, Connection, SystemSpec
-from altfusion.estimators.base import stream_inputs
 from altfusion.estimators.baseline import BaselineKF
 from altfusion.estimators.hajiyev import HajiyevAdaptiveEstimator
 from altfusion.estimators.whang import WhangGAEstimator
@@ -145,7 +144,7 @@ def catalog_replay(name: str) -> SystemSpec:
     """A catalog replay system: a bundled log and the three catalog estimators, each with its
     core's declared inputs and the replay tuning."""
     log = LOGS[name]
-    entries = [EstimatorEntry(fmu, stream_inputs(core.streams),
+    entries = [EstimatorEntry(fmu, core.declared_inputs(),
                               replay_tuning(fmu, log.calibration))
                for fmu, core in CATALOG_ESTIMATORS.items()]
     spec, _ = replay_system(name, f"flightlogs/{log.file}", log.stop_time, entries,

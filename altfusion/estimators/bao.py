@@ -1,0 +1,215 @@
+"""BaoDriftEstimator: barometer error correction with an adaptive drift Kalman filter (seed 001).
+
+Fig. 3 of the paper, block by block. Each ε is a correction, true minus barometric height: the
+paper writes the baro height as H_B = h_t - δh_B (Section 3.3) and δh_B = ε_p + ε_d + ε_e
+(eq. 1), and eqs. (4)-(5) and (11) are differences "actual minus measured" as well.
+
+* Principle error (Sections 2.1, 3.1), eq. (5): ε_p = a·(H - H0) + b with
+  a = (Rβ/g)·ΔP/P0 + ΔT/T0 and b = (R·T0/g)·ΔP/P0, where P0, T0 are the pressure and temperature
+  at the reference height H0 that the barometer's height formula (eq. 2) assumes, and
+  ΔP = P0' - P0, ΔT = T0' - T0 their differences from the actual values a weather station
+  reports (parameters ``p0_actual``, ``T0_actual``). H is "the altitude of the last time": the
+  previous estimate (the baro height itself at the first sample). With H0 = 0 this is the
+  paper's eq. (5); with ``p0_actual`` = ``p0`` and ``T0_actual`` = ``T0`` (the defaults) ε_p = 0.
+* Wind disturbance (Sections 2.3, 3.2), eq. (11): the wind's dynamic pressure ½ρv² (eq. 7)
+  lowers the static pressure the barometer measures (eq. 8), so with P_S' the undisturbed
+  static pressure = measured ``baro_p`` + ½ρv²,
+  ε_e = (T0/β)[(P_S'/P0)^(-βR/g) - ((P_S' - ½ρv²)/P0)^(-βR/g)]  (negative: wind reads high).
+  This is eq. (11) with P_S' read as the undisturbed pressure, which makes it exact (NOTES.md);
+  taking the measured pressure instead differs in the second order only. ``wind_speed`` is an
+  input, used only when ``use_wind`` is true (FMI cannot tell whether an input is connected);
+  a non-finite wind speed is noted and the last finite one is used.
+* Drift (Sections 2.2, 3.3): the random walk of eq. (6) discretised as eq. (12),
+  X(k+1) = X(k) + W(k), Q = σ²·dt per step (``drift_psd``); the observation of eq. (13),
+  Z = H_G - H_B = δh_B + δh_G with H = [1], at each GPS sample against the latest corrected baro
+  height; the measurement noise R_k = η_k·C of eq. (14).
+
+The factor η of eq. (14), which the paper does not define (NOTES.md): the GPS height error is
+modelled as σ_G = UERE·VDOP·√max(1, N_ref/N), the user-equivalent range error times the
+vertical dilution of precision, growing further when fewer than N_ref satellites are used (the
+same model as the GnssReceiver FMU). C is the variance at the worst accuracy the filter
+accepts and η = min(1, σ_G²/C), so 0 < η ≤ 1 and R_k = η_k·C = σ_G² until the GPS gets worse
+than the worst case. A sample reporting VDOP ≤ 0 or no satellites gets the worst case η = 1.
+With ``adaptive_R`` false the filter is the paper's "normal Kalman filter" with the constant
+R = ``R_gps``.
+
+Outputs: h_est = H_B + ε_p + ε_e + ε̂_d (the corrected baro height); h_std = √(P + R_baro)
+(the drift estimate's variance plus the baro's white noise, which the random-walk state does
+not carry); the algorithm estimates no vertical speed, so vz_est is always 0. A GPS sample whose
+innovation exceeds ``gate_sigma`` standard deviations √(P + R_k) is rejected and logged (not in
+the paper). The filter starts at the first baro sample; GPS samples before it are not used.
+
+Scenarios of the paper (for the systems that will reproduce them):
+
+* Section 4.2 (wind): static at the ground, AirDataModule at 10 Hz (MS5611, Table 1) with the
+  wind's dynamic pressure and ρ = 1.25 kg/m³ (eq. 7), Atmosphere wind 1.5 / 2.5 / 3.5 m/s for
+  about 1 min after 1 min of calm; ``use_wind`` true. At ISA sea level eq. (11) gives
+  0.117 / 0.325 / 0.637 m (Table 3's values need a warmer day, NOTES.md).
+* Section 4.3 (static drift): 1 h at a fixed height, no wind, AirDataModule at 10 Hz with a
+  drift of about +10 m/h (Fig. 1), GnssReceiver (u-blox LEA-6H) at 5 Hz with VDOP and satellite
+  count varying (``dop_mode`` scheduled or random, the same ``user_range_error`` and
+  ``nsat_reference`` here); compare ``adaptive_R`` true with false (Fig. 8).
+"""
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from altfusion.constants import G0, ISA_LAPSE_RATE, ISA_P0, ISA_T0, R_AIR
+from altfusion.estimators.base import BARO_P, GPS_QUALITY, Estimator, Stream
+from altfusion.estimators.kalman import predict, scalar_gate, update
+from altfusion.params import param
+from altfusion.physics.barometric import height_from_pressure
+
+ONE = np.array([[1.0]])
+
+
+def principle_error(H: float, H0: float, p0: float, T0: float, p0_actual: float,
+                    T0_actual: float, lapse_rate: float) -> float:
+    """ε_p = a·(H - H0) + b (eq. 5): the first-order correction (true minus baro height) for
+    actual reference pressure and temperature differing from the assumed ones (eq. 4)."""
+    dP, dT = p0_actual - p0, T0_actual - T0
+    a = R_AIR * lapse_rate / G0 * dP / p0 + dT / T0
+    b = R_AIR * T0 / G0 * dP / p0
+    return a * (H - H0) + b
+
+
+def wind_error(p_measured: float, wind_speed: float, air_density: float, H0: float, p0: float,
+               T0: float, lapse_rate: float) -> float:
+    """ε_e (eq. 11): true minus baro height for the dynamic pressure ½ρv² (eq. 7) of the wind;
+    ``p_measured`` is the disturbed static pressure P_S - ½ρv² (eq. 8) the barometer reads."""
+    dynamic = 0.5 * air_density * wind_speed**2                                 # (7)
+    undisturbed = p_measured + dynamic                                          # (8)
+    return (height_from_pressure(undisturbed, p0, T0, lapse_rate, H0)
+            - height_from_pressure(p_measured, p0, T0, lapse_rate, H0))         # (9)-(11)
+
+
+def gps_height_std(vdop: float, nsat: int, user_range_error: float, nsat_reference: int) -> float:
+    """σ_G = UERE·VDOP·√max(1, N_ref/N): the GPS height error the reported quality implies."""
+    return user_range_error * vdop * math.sqrt(max(1.0, nsat_reference / nsat))
+
+
+@dataclass(frozen=True)
+class BaoParams:
+    H0: float = param(0.0, "m", "Reference height H0 of the baro height formula (eq. 2); "
+                                "0: sea level, as in eq. (5)")
+    p0: float = param(ISA_P0, "Pa", "Pressure P0 at H0 that the baro height formula assumes "
+                                    "(standard sea level)", positive=True)
+    T0: float = param(ISA_T0, "K", "Temperature T0 at H0 that the baro height formula assumes "
+                                   "(standard sea level)", positive=True)
+    lapse_rate: float = param(ISA_LAPSE_RATE, "K/m", "Lapse rate β = dT/dh of the formula",
+                              max=0.0)
+    p0_actual: float = param(ISA_P0, "Pa", "Actual pressure at H0 from weather data (Section "
+                                           "3.1); equal to p0: no principle-error correction",
+                             positive=True)
+    T0_actual: float = param(ISA_T0, "K", "Actual temperature at H0 from weather data; equal "
+                                          "to T0: no principle-error correction", positive=True)
+    use_wind: bool = param(False, None, "Correct the wind disturbance (eq. 11) with the "
+                                        "wind_speed input; false: the input is not used")
+    air_density: float = param(1.25, "kg/m3", "Air density ρ of the dynamic pressure (eq. 7: "
+                                              "1.25 kg/m³)", positive=True)
+    drift_psd: float = param(0.03, "m2/s", "Variance growth σ² of the drift random walk (eq. 6): "
+                                           "0.03 m²/s wanders about 10 m per hour (Fig. 1)",
+                             min=0.0)
+    P0_drift: float = param(100.0, "m2", "Initial variance P(0) of the drift estimate",
+                            positive=True)
+    adaptive_R: bool = param(True, None, "R_k = η_k·C (eq. 14); false: the normal Kalman "
+                                         "filter with constant R = R_gps")
+    R_gps: float = param(9.0, "m2", "Constant R of the normal Kalman filter (adaptive_R false): "
+                                    "the GPS height variance at VDOP 1.5 with UERE 2 m",
+                         positive=True)
+    R_worst: float = param(225.0, "m2", "C of eq. (14): the GPS height variance at the worst "
+                                        "accuracy accepted (15 m), where η = 1", positive=True)
+    user_range_error: float = param(2.0, "m", "UERE of the GPS height error model "
+                                              "σ_G = UERE·VDOP·√max(1, N_ref/N)", positive=True)
+    nsat_reference: int = param(6, None, "N_ref: below this many satellites σ_G grows as "
+                                         "√(N_ref/N)", min=1)
+    R_baro: float = param(0.01, "m2", "White-noise variance of the baro height (MS5611: 0.1 m, "
+                                      "Table 1), added to h_std", min=0.0)
+    gate_sigma: float = param(5.0, "1", "Innovation gate on GPS in standard deviations "
+                                        "(0: off); not in the paper", min=0.0)
+
+
+class BaoDriftEstimator(Estimator):
+    """Bao et al.'s barometer error correction (seed 001, Fig. 3): principle error, wind
+    disturbance and a drift Kalman filter with the adaptive R of eq. (14)."""
+
+    Params = BaoParams
+    streams = (BARO_P, GPS_QUALITY)
+    extra_inputs = ("wind_speed",)
+
+    def initialize_filter(self) -> None:
+        p = self.params
+        self.x = np.zeros(1)
+        self.P = np.array([[p.P0_drift]])
+        self.started = False
+        self.h_baro = float(self.baro_h)
+        self.h_baro_corrected = self.h_baro
+        self.principle_error = 0.0
+        self.wind_error = 0.0
+        self.eta = 1.0
+        self.R = p.R_worst if p.adaptive_R else p.R_gps
+        self.gps_std = math.sqrt(self.R)
+        self.innovation = 0.0
+        self._publish()
+
+    def propagate(self, dt: float) -> None:
+        """Eq. (12): X(k+1) = X(k) + W(k), F = G = [1], Q = σ²·dt."""
+        self.x, self.P = predict(self.x, self.P, ONE, np.array([[self.params.drift_psd * dt]]))
+        self._publish()
+
+    def fuse(self, stream: Stream, sample: dict[str, float]) -> None:
+        if stream is BARO_P:
+            self._correct_baro(sample["baro_h"], sample["baro_p"])
+        elif self.started:
+            self._drift_update(sample["gps_h"], sample["gps_vdop"], int(sample["gps_nsat"]))
+        self._publish()
+
+    def _correct_baro(self, h_baro: float, p_baro: float) -> None:
+        """Principle (eq. 5) and wind (eq. 11) corrections of one baro sample."""
+        p = self.params
+        H = self.h_est if self.started else h_baro       # "the altitude of the last time"
+        self.principle_error = principle_error(H, p.H0, p.p0, p.T0, p.p0_actual, p.T0_actual,
+                                               p.lapse_rate)
+        self.wind_error = 0.0
+        if p.use_wind:
+            wind = self.held_input("wind_speed")
+            if p_baro > 0.0:
+                self.wind_error = wind_error(p_baro, wind, p.air_density, p.H0, p.p0, p.T0,
+                                             p.lapse_rate)
+            else:
+                self.note(f"baro: pressure {p_baro!r} Pa is not positive; no wind correction")
+        self.h_baro = h_baro
+        self.h_baro_corrected = h_baro + self.principle_error + self.wind_error
+        self.started = True
+
+    def _drift_update(self, h_gps: float, vdop: float, nsat: int) -> None:
+        """Eqs. (13)-(14): Z = H_G - H_B against the latest corrected baro height."""
+        p = self.params
+        if p.adaptive_R:
+            if vdop > 0.0 and nsat > 0:
+                sigma = gps_height_std(vdop, nsat, p.user_range_error, p.nsat_reference)
+                self.eta = min(1.0, sigma**2 / p.R_worst)
+            else:
+                self.eta = 1.0
+            R = self.eta * p.R_worst                                            # (14)
+        else:
+            R = p.R_gps
+        z = h_gps - self.h_baro_corrected                                       # (13)
+        innovation = z - float(self.x[0])
+        variance = float(self.P[0, 0]) + R
+        if not scalar_gate(innovation, variance, p.gate_sigma):
+            self.reject(GPS_QUALITY, innovation, math.sqrt(variance))
+            return
+        result = update(self.x, self.P, z, ONE, R)
+        self.x, self.P = result.x, result.P
+        self.R, self.gps_std = R, math.sqrt(R)
+        self.innovation = innovation
+
+    def _publish(self) -> None:
+        self.drift = float(self.x[0])
+        self.drift_std = math.sqrt(float(self.P[0, 0]))
+        self.h_est = self.h_baro_corrected + self.drift
+        self.vz_est = 0.0
+        self.h_std = math.sqrt(float(self.P[0, 0]) + self.params.R_baro)

@@ -1,0 +1,333 @@
+"""XuSHAEKF: the improved Sage-Husa adaptive Kalman filter of Xu et al. (seed 004, Fig. 7).
+
+State and model (Section 2.1). x = [h, vz, b_a, ε_b]: altitude, vertical speed, accelerometer
+bias and the barometer's constant error ε_b of eqs. (4) and (14). The accelerometer is the
+input u of eqs. (8)-(10) (gravity already removed, ``acc_z``): with the fusion cycle T_s = dt,
+
+    x_k = Φ x_{k-1} + B u_{k-1} + Γ W_{k-1},   Φ = [[1, T, -T²/2, 0], [0, 1, -T, 0],
+                                                   [0, 0, 1, 0], [0, 0, 0, 1]],
+    B = Γ = [T²/2, T, 0, 0]ᵀ                                                   (10), (11)
+
+so eq. (19) carries the input term B·u that the paper dropped (NOTES.md), and the
+double-integrated accelerometer altitude is not a measurement (the "MEMS" row of eq. 14
+diverges, NOTES.md). Additions: b_a, which the realistic MEMS bias of NOTES.md calls for
+(a random walk of ``acc_bias_psd``), and a random walk of ``baro_bias_psd`` on ε_b, so that a
+barometer that is not being calibrated against GPS grows honestly uncertain.
+
+Measurements (eq. 14): GPS z = h + ω_g at every GPS sample; the active height source is the
+laser (z = laser_h + ``terrain_h``, H = [1, 0, 0, 0]) below ``switch_h`` = 25 m above the
+terrain and the barometer (z = h + ε_b, H = [1, 0, 0, 1]) above it. Hysteresis: the laser
+hands over to the baro when the estimated height above the terrain exceeds ``switch_h`` or no
+valid laser sample came for ``laser_timeout``; the baro hands back when the height is below
+``switch_h - switch_hysteresis`` and the laser is valid. The active source is the Integer output
+``height_source``: 0 = barometer, 1 = laser.
+
+Each measurement of sensor x (gps, baro, laser) is one scalar update, in the order of Section
+2.3 with the additions marked. The paper keeps two noise levels apart, and so does this
+filter: the sensor's nominal R_k (parameters ``R_gps``, ``R_baro``, ``R_laser``) in the
+theoretical innovation variance of eq. (16) and in the convergence criterion of eq. (23), and
+the estimate R̂_k of eq. (22) in the gain of eq. (25). A divergence or a failing sensor that
+the estimate R̂ absorbs thus still shows against the nominal R.
+
+1. innovation v = z - H x⁻ (eq. 20) and its theoretical variance C = H P⁻ Hᵀ + R_k (eq. 16);
+2. data analysis (Section 2.2, eqs. 15-18): α_C = √(mean of v²/C over the sensor's last N
+   innovations), the ratio of actual to theoretical innovation spread of eqs. (15)-(17) (each
+   innovation normalised by its own C, which equals eq. 15 over eq. 16 while C is steady), and
+   the sensor weight α = min(1, (c/α_C)²): 1 while the sensor behaves (α_C ≈ 1), falling as the
+   square of the excess otherwise (the bounded mapping of NOTES.md for eq. 18);
+3. (addition) gate: a sample with v² > ``gate_sigma``²·(H P⁻ Hᵀ + R̂) is rejected and logged;
+   its innovation still enters the window of step 2, so a failing sensor loses weight. After
+   ``max_rejections`` consecutive rejections of the active height source (a real jump, e.g. of
+   the terrain under the laser) its next sample is re-acquired: accepted with a fresh window
+   (and strong tracking, since it fails eq. 23);
+4. measurement noise (eq. 22) R̂_k = (1-β_k) R̂_{k-1} + β_k [(1 - H K_{k-1})² v² + H P_{k-1} Hᵀ],
+   the post-fit residual's spread plus the posterior variance, with the fading factor of
+   eq. (28) β_k = β_{k-1}/(β_{k-1} + b), one sequence per sensor (NOTES.md) and β = 1 before
+   the first sample, so the nominal R carries the weight of one sample (β_k tends to 1 - b).
+   In a multi-rate filter the sensor's previous gain belongs to another prior, so K_{k-1} and
+   P_{k-1} are read as the gain and posterior this sample would get with R̂_{k-1}: same fixed
+   point (R̂ = R makes the bracket's mean R), and a sensor's first innovations, which carry the
+   state's error as much as its noise (a hand-over from baro to laser), do not blow R̂ up;
+5. convergence criterion (eq. 23) v² ≤ γ·(H P⁻ Hᵀ + R_k), checked on the active height source
+   (a diverging state shows in the primary height measurement; on GPS strong tracking would
+   hand a full gain to the least accurate sensor). If it fails, eq. (24) with the strong
+   tracking filter's suboptimal fading factor λ = max(1, (v² - R_k)/H P⁻ Hᵀ) (Ref. 13), which
+   makes the predicted innovation variance match v²: P⁻ ← λ P⁻ on the states the innovation
+   can correct (h, vz, b_a, and ε_b when the baro is measured; ε_b is unobserved under the
+   laser and would otherwise grow without bound), λ at most ``MAX_FADING`` per step;
+6. gain K = P⁻Hᵀ/(H P⁻ Hᵀ + R̂) (eq. 25), x = x⁻ + α K v (eq. 26) and the Joseph form of eq.
+   (27) for the gain actually used (α K);
+7. system noise (step 8 of Section 2.3): Q̂ = B σ̂_a² Bᵀ with σ̂_a² the accelerometer noise
+   variance estimated in real time from its last ``acc_window`` samples, mean((Δa)²)/2 (first
+   differences cancel the slowly varying true acceleration), never below the nominal
+   ``acc_noise_std``².
+
+The convergence threshold γ (not given in the paper) is a false-alarm threshold: while the
+filter converges v²/(H P⁻ Hᵀ + R) follows χ² with one degree of freedom. P(χ²₁ > 4) = 4.6 %:
+with γ = 4 a 50-100 Hz height source triggers strong tracking several times a second on plain
+noise, each time inflating P toward the measurement noise (NOTES.md; at 35 m the error reaches
+several metres). γ = 16 (4σ) gives P = 6·10⁻⁵, about one false alarm every five minutes at
+50 Hz, each harmless, while a real divergence (an accelerometer bias jump) is caught within a
+few samples. Strong tracking is not optional: without it, a divergence makes α fall and R̂
+grow along with the innovations, the filter stops listening to its height source and runs
+away (tests/test_estimators_xu.py).
+
+With ``adaptive`` false the filter is the "Kalman filter improved before" of Figs. 10-11: the
+same model and gate with the nominal R and Q, α = 1 and no strong tracking.
+
+Scenarios of the paper (Section 3): profiles ``xu_hover15`` (hover at 15 m, GPS failing
+suddenly), ``xu_hover35`` (35 m: laser out of range, reading 0) and ``xu_multipoint`` (10, 22,
+37 m within 1000 s; Section 3.2's bounds: error ≤ 1 m below 25 m and ≤ 1.2 m above without
+wind, 1.1 / 1.5 m with wind grade 3); sensors with realistic noise since the paper gives none
+(NOTES.md): LaserRangefinder at 100 Hz, ±5 mm, 0.1-25 m; AirDataModule with a MEMS baro of
+0.5 m; GnssReceiver at 5 Hz with a few metres; Accelerometer at 100 Hz with 0.05 m/s² noise
+and a residual bias of a few 0.01 m/s²; the estimator stepped at the accelerometer's period.
+"""
+
+import math
+from collections import deque
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from altfusion.estimators.base import ACC, BARO, GPS, LASER, Estimator, Stream
+from altfusion.estimators.kalman import predict, update
+from altfusion.params import param
+
+BARO_SOURCE, LASER_SOURCE = 0, 1
+H_ALTITUDE = np.array([[1.0, 0.0, 0.0, 0.0]])
+H_BARO = np.array([[1.0, 0.0, 0.0, 1.0]])
+MOTION_STATES = np.array([True, True, True, False])
+"""h, vz and the accelerometer bias: the states strong tracking always inflates."""
+MIN_VARIANCE = 1e-12
+"""Floor of H P⁻ Hᵀ in the strong-tracking factor, m²."""
+MAX_FADING = 1000.0
+"""Largest λ of one strong-tracking step (eq. 24); a larger mismatch takes a few samples."""
+
+
+@dataclass(frozen=True)
+class XuParams:
+    R_gps: float = param(9.0, "m2", "Nominal GPS height variance R (3 m: a few metres, "
+                                    "NOTES.md)", positive=True)
+    R_baro: float = param(0.25, "m2", "Nominal baro height variance (MEMS baro: 0.5 m)",
+                          positive=True)
+    R_laser: float = param(2.5e-5, "m2", "Nominal laser variance (Section 1.2.4: ±5 mm)",
+                           positive=True)
+    acc_noise_std: float = param(0.05, "m/s2", "Nominal accelerometer white noise per sample "
+                                               "(MEMS at 100 Hz); floor of the estimate σ̂_a",
+                                 positive=True)
+    acc_window: int = param(100, None, "Accelerometer samples of the real-time noise estimate",
+                            min=2)
+    acc_bias_std: float = param(0.05, "m/s2", "Initial 1σ of the accelerometer bias (calibrated "
+                                              "MEMS: 0.01-0.05 m/s²)", positive=True)
+    acc_bias_psd: float = param(1e-6, "m2/s5", "Random walk of the accelerometer bias",
+                                min=0.0)
+    baro_bias_std: float = param(1.0, "m", "Initial 1σ of the baro constant error ε_b (eq. 4; "
+                                           "after the take-off calibration)", positive=True)
+    baro_bias_psd: float = param(0.01, "m2/s", "Random walk of ε_b (weather drift, about 6 m "
+                                               "per hour)", min=0.0)
+    P0_vz: float = param(1.0, "m2/s2", "Initial vertical-speed variance", positive=True)
+    terrain_h: float = param(0.0, "m", "Terrain height under the laser (MSL)")
+    switch_h: float = param(25.0, "m", "Laser below, baro above this height over the terrain "
+                                       "(eq. 14)", positive=True)
+    switch_hysteresis: float = param(1.0, "m", "Back to the laser only below switch_h minus "
+                                               "this", min=0.0)
+    laser_timeout: float = param(0.1, "s", "Without a valid laser sample for this long the "
+                                           "baro takes over", positive=True)
+    adaptive: bool = param(True, None, "Improved SHAEKF (eqs. 15-28); false: the Kalman filter "
+                                       "with nominal R and Q (Figs. 10-11's comparison)")
+    b_gps: float = param(0.99, "1", "Fading memory factor b of eq. (28) for GPS", min=0.5,
+                         max=0.9999)
+    b_baro: float = param(0.99, "1", "Fading memory factor b of eq. (28) for the baro",
+                          min=0.5, max=0.9999)
+    b_laser: float = param(0.99, "1", "Fading memory factor b of eq. (28) for the laser",
+                           min=0.5, max=0.9999)
+    innovation_window: int = param(20, None, "N of eq. (15): innovations per sensor in the "
+                                             "actual innovation variance", min=1)
+    weight_c: float = param(1.5, "1", "c of the weight α = min(1, (c/α_C)²) (eq. 18): the "
+                                      "innovation ratio tolerated at full weight",
+                            positive=True)
+    gamma: float = param(16.0, "1", "Convergence threshold γ of eq. (23) (4σ, see the module "
+                                    "documentation)", positive=True)
+    gate_sigma: float = param(6.0, "1", "Gate in standard deviations √C (0: off); not in the "
+                                        "paper", min=0.0)
+    max_rejections: int = param(10, None, "Consecutive rejections of the active height source "
+                                          "before it is re-acquired", min=1)
+
+
+@dataclass
+class Channel:
+    """The adaptive statistics of one sensor's measurements (eqs. 15-18, 22, 28)."""
+
+    R_nominal: float
+    b: float
+    window: deque = field(default_factory=deque)
+    R_hat: float = 0.0
+    beta: float = 1.0
+    weight: float = 1.0
+    rejections: int = 0
+
+    def __post_init__(self):
+        self.R_hat = self.R_nominal
+
+    def innovation_ratio(self, nis: float) -> float:
+        """Eqs. (15)-(17): push v²/C and return α_C, the actual over the theoretical spread."""
+        self.window.append(nis)
+        return math.sqrt(sum(self.window) / len(self.window))
+
+    def estimate_noise(self, innovation: float, hph: float) -> None:
+        """Eqs. (22) and (28), with H K_{k-1} = H P⁻ Hᵀ/(H P⁻ Hᵀ + R̂_{k-1}), the gain before
+        this noise estimate, and H P_{k-1} Hᵀ = (1 - H K_{k-1}) H P⁻ Hᵀ its posterior."""
+        self.beta = self.beta / (self.beta + self.b)                            # (28)
+        hk = hph / (hph + self.R_hat)
+        residual = (1.0 - hk) * innovation
+        self.R_hat = ((1.0 - self.beta) * self.R_hat
+                      + self.beta * (residual**2 + (1.0 - hk) * hph))           # (22)
+
+
+class XuSHAEKF(Estimator):
+    """Xu et al.'s improved Sage-Husa adaptive Kalman filter (seed 004): accelerometer-driven
+    height with laser/baro switching, GPS, adaptive noise, sensor weights and strong tracking."""
+
+    Params = XuParams
+    streams = (ACC, LASER, BARO, GPS)
+
+    def initialize_filter(self) -> None:
+        p = self.params
+        self.x = np.zeros(4)
+        self.P = np.diag([p.R_baro, p.P0_vz, p.acc_bias_std**2, p.baro_bias_std**2])
+        self.started = False
+        self.u = 0.0
+        self._acc_last: float | None = None
+        self._acc_diffs: deque = deque(maxlen=p.acc_window)
+        self.acc_noise_est = p.acc_noise_std
+        self.channels = {
+            "gps": Channel(p.R_gps, p.b_gps, deque(maxlen=p.innovation_window)),
+            "baro": Channel(p.R_baro, p.b_baro, deque(maxlen=p.innovation_window)),
+            "laser": Channel(p.R_laser, p.b_laser, deque(maxlen=p.innovation_window)),
+        }
+        self.height_source = BARO_SOURCE
+        self._last_laser_time = -math.inf
+        self.strong_tracking_factor = 1.0
+        self.n_strong_tracking = 0
+        self._publish()
+
+    # -------------------------------------------------------------- time update
+    def propagate(self, dt: float) -> None:
+        """Eqs. (10)-(11), (19), (21) with the input u = latest acc_z and Q̂ = B σ̂_a² Bᵀ."""
+        if not self.started:
+            return
+        p = self.params
+        Phi = np.array([[1.0, dt, -dt * dt / 2.0, 0.0], [0.0, 1.0, -dt, 0.0],
+                        [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+        B = np.array([[dt * dt / 2.0], [dt], [0.0], [0.0]])
+        Q = B @ B.T * self.acc_noise_est**2
+        Q[2, 2] += p.acc_bias_psd * dt
+        Q[3, 3] += p.baro_bias_psd * dt
+        self.x, self.P = predict(self.x, self.P, Phi, Q, B, self.u)
+        self._publish()
+
+    # -------------------------------------------------------------- measurements
+    def fuse_samples(self, samples: dict[Stream, dict[str, float]]) -> None:
+        p = self.params
+        if ACC in samples:
+            self._accelerometer(samples[ACC]["acc_z"])
+        if LASER in samples:
+            self._last_laser_time = self.time
+        self._select_source()
+        if LASER in samples and self.height_source == LASER_SOURCE:
+            self._measure("laser", samples[LASER]["laser_h"] + p.terrain_h, H_ALTITUDE)
+        if BARO in samples and self.height_source == BARO_SOURCE:
+            self._measure("baro", samples[BARO]["baro_h"], H_BARO)
+        if GPS in samples:
+            self._measure("gps", samples[GPS]["gps_h"], H_ALTITUDE)
+        self._publish()
+
+    def _accelerometer(self, acc: float) -> None:
+        """The input u of eq. (9) and the real-time noise estimate of step 8."""
+        if self._acc_last is not None:
+            self._acc_diffs.append((acc - self._acc_last) ** 2)
+        self._acc_last = self.u = acc
+        if self.params.adaptive and self._acc_diffs:
+            estimate = math.sqrt(sum(self._acc_diffs) / (2.0 * len(self._acc_diffs)))
+            self.acc_noise_est = max(self.params.acc_noise_std, estimate)
+
+    def _select_source(self) -> None:
+        """Eq. (14): laser below switch_h over the terrain, baro above, with hysteresis."""
+        p = self.params
+        laser_live = self.time - self._last_laser_time <= p.laser_timeout
+        above = float(self.x[0]) - p.terrain_h
+        if self.height_source == LASER_SOURCE:
+            if not laser_live or (self.started and above > p.switch_h):
+                self.height_source = BARO_SOURCE
+        elif laser_live and (not self.started or above < p.switch_h - p.switch_hysteresis):
+            self.height_source = LASER_SOURCE
+
+    def _measure(self, name: str, z: float, H: np.ndarray) -> None:
+        """Steps 1-6 of the module documentation for one sample of sensor ``name``."""
+        p = self.params
+        channel = self.channels[name]
+        if not self.started:
+            self._start(z, H, channel.R_hat)
+            return
+        innovation = z - float((H @ self.x)[0])                                 # (20)
+        hph = float((H @ self.P @ H.T)[0, 0])
+        ratio = channel.innovation_ratio(innovation**2 / (hph + channel.R_nominal))  # (15)-(17)
+        if p.adaptive:
+            channel.weight = min(1.0, (p.weight_c / ratio) ** 2)                # (18)
+        C = hph + channel.R_hat
+        active = name != "gps"
+        if p.gate_sigma > 0.0 and innovation**2 > p.gate_sigma**2 * C:
+            channel.rejections += 1
+            if not (active and channel.rejections > p.max_rejections):
+                self.reject(self._stream(name), innovation, math.sqrt(C))
+                return
+            self.note(f"{name}: re-acquired after {p.max_rejections} consecutive rejections "
+                      f"(innovation {innovation:.4g} m)")
+            channel.window.clear()
+            channel.weight = 1.0
+        channel.rejections = 0
+        if p.adaptive:
+            channel.estimate_noise(innovation, hph)                             # (22), (28)
+            if active and innovation**2 > p.gamma * (hph + channel.R_nominal):   # (23)
+                self._strong_tracking(innovation**2, channel.R_nominal, hph, H)  # (24)
+        result = update(self.x, self.P, z, H, channel.R_hat,
+                        gain_scale=channel.weight)                              # (25)-(27)
+        self.x, self.P = result.x, result.P
+
+    def _strong_tracking(self, innovation_sq: float, R: float, hph: float,
+                         H: np.ndarray) -> None:
+        """Eq. (24): P⁻ ← λ P⁻ with λ = max(1, (v² - R)/H P⁻ Hᵀ), at most MAX_FADING.
+
+        λ scales the states the innovation can correct: h, vz, the accelerometer bias that
+        drives them, and ε_b when the baro is measured (P⁻ ← D P⁻ D, D = √λ on those states and
+        1 elsewhere, which keeps P⁻ positive definite). ε_b under the laser is not observed;
+        inflating it at every strong-tracking step would let its variance grow without bound."""
+        factor = min(MAX_FADING, max(1.0, (innovation_sq - R) / max(hph, MIN_VARIANCE)))
+        inflated = MOTION_STATES | (H[0] != 0.0)
+        root = np.where(inflated, math.sqrt(factor), 1.0)
+        self.P = self.P * np.outer(root, root)
+        self.strong_tracking_factor = factor
+        self.n_strong_tracking += 1
+
+    def _start(self, z: float, H: np.ndarray, R: float) -> None:
+        """Start at the first height sample: h = z - (rest of H)·x, uncorrelated with vz."""
+        self.x[0] = z - float(H[0, 3] * self.x[3])
+        self.P[0, :] = self.P[:, 0] = 0.0
+        self.P[0, 0] = R + H[0, 3] ** 2 * self.P[3, 3]
+        self.P[0, 3] = self.P[3, 0] = -H[0, 3] * self.P[3, 3]
+        self.started = True
+
+    @staticmethod
+    def _stream(name: str) -> Stream:
+        return {"gps": GPS, "baro": BARO, "laser": LASER}[name]
+
+    def _publish(self) -> None:
+        self.h_est, self.vz_est, self.acc_bias, self.baro_bias = (float(v) for v in self.x)
+        self.h_std = math.sqrt(float(self.P[0, 0]))
+        self.weight_gps = self.channels["gps"].weight
+        self.weight_baro = self.channels["baro"].weight
+        self.weight_laser = self.channels["laser"].weight
+        self.R_gps_est = self.channels["gps"].R_hat
+        self.R_baro_est = self.channels["baro"].R_hat
+        self.R_laser_est = self.channels["laser"].R_hat

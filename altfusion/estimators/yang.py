@@ -1,0 +1,223 @@
+"""YangFusionKF: optimal weighted fusion of GPS, baro and radio-altimeter heights, then a
+Kalman filter on height, vertical speed and acceleration (seed 003, Fig. 1).
+
+Section 3.1, space-time unification of the heights:
+
+* time (3.1.1): each height sensor's samples are brought to the time t_b of the benchmark
+  sample by eq. (5) as corrected in NOTES.md, a linear extrapolation through its last two
+  samples (t_c < t_a) read from their ``<prefix>_time`` stamps:
+  Q_tb = Q_ta + (t_b - t_a)(Q_ta - Q_tc)/(t_a - t_c)  (Q_ta alone after a sensor's first sample).
+  The benchmark is the sensor with the largest sampling period (radio altimeter 200 ms, GPS
+  100 ms, baro 10 ms in Section 4.2): a fusion happens at each new sample of the first *live*
+  sensor in the order radar, GPS, baro, and a sensor is live while its last sample is at most
+  ``max_sample_age`` old. So the fusion falls back to GPS and baro when the radar is out of
+  range, and to the baro alone when GPS is out as well.
+* space (3.1.2), eq. (6): the radio altimeter measures above the terrain, so its height is
+  Q_real = Q + Q_sealevel with Q_sealevel the parameter ``terrain_h`` (seed 003 flies over
+  terrain at sea level: 0).
+
+Section 3.2, optimal weighted fusion (eqs. 7-8) of the live sensors at t_b:
+y = Σ ω_i x_i with ω_i = [σ_i² Σ_j 1/σ_j²]⁻¹, whose variance σ_y² = [Σ_j 1/σ_j²]⁻¹ is the
+smallest (8.57 m for 30 / 20 / 10 m). The σ_i are the parameters R_gps, R_baro, R_radar.
+
+Section 3.3, Kalman filter (eqs. 9-14) on Ω = [y, v, a]: A of eq. (9) for each step of the
+estimator, and at each step the rows of Ψ = H·Ω + δ (H = I) for which a sample arrived: the
+fused height (σ_y²), the GPS vertical speed (σ_v²) and the IMU acceleration (σ_a²), in one
+update (eqs. 12-14, Joseph form). The paper's filter has no process noise (eq. 11); taken
+literally it cannot follow the trajectory's acceleration steps (NOTES.md), so eq. (11) gets a
+white-jerk process noise of spectral density ``jerk_psd`` (an addition, Q = q·∫ φφᵀ with
+φ = [t²/2, t, 1]). The filter starts at the first fusion with h = y, Var h = σ_y².
+
+Additions for robustness: a height sample whose difference from the filter's predicted height
+exceeds ``gate_sigma`` standard deviations √(P_hh + σ_i²) is rejected and logged before it
+enters the fusion (GPS vertical speed and acceleration are not gated: acceleration steps are
+real); invalid and non-finite samples are ignored (the Estimator base).
+
+Scenario of the paper (Section 4): profile ``yang2020`` (climb, cruise at 1440 m, descent over
+420 s, reference altitude sea level); GnssReceiver every 100 ms with σ_h = 30 m
+(``user_range_error`` 20 m at VDOP 1.5) and σ_v = 0.2 m/s; AirDataModule every 10 ms with 20 m
+white noise, no scale-factor error and no drift; RadioAltimeter every 200 ms with 10 m over flat
+terrain at 0 m; Accelerometer with 0.01 m/s² (its rate is not given: 10 ms here); sensor
+clocks aligned (NOTES.md); the estimator stepped every 10 ms; 500 Monte Carlo runs, accuracy
+by eq. (15).
+"""
+
+import math
+from collections import deque
+from dataclasses import dataclass
+
+import numpy as np
+
+from altfusion.estimators.base import ACC, BARO_TIMED, GPS_VZ_TIMED, RADAR_TIMED, Estimator
+from altfusion.estimators.kalman import predict, scalar_gate, update
+from altfusion.params import param
+
+IDENTITY = np.eye(3)
+HEIGHT_SENSORS = ("radar", "gps", "baro")
+"""The height sensors in benchmark order: largest sampling period first (Section 4.2)."""
+
+
+def unify_time(history, t_b: float) -> float:
+    """Eq. (5) corrected: the height at t_b from the last two samples (t_c, Q_tc), (t_a, Q_ta)."""
+    t_a, q_a = history[-1]
+    if len(history) < 2 or history[0][0] >= t_a:
+        return q_a
+    t_c, q_c = history[0]
+    return q_a + (t_b - t_a) * (q_a - q_c) / (t_a - t_c)
+
+
+def weighted_fusion(heights: dict[str, float], variances: dict[str, float],
+                    ) -> tuple[float, float, dict[str, float]]:
+    """Eqs. (7)-(8): y = Σ ω_i x_i, ω_i = [σ_i² Σ 1/σ_j²]⁻¹; returns y, σ_y², the weights."""
+    information = sum(1.0 / variances[name] for name in heights)
+    weights = {name: 1.0 / (variances[name] * information) for name in heights}
+    return sum(weights[n] * heights[n] for n in heights), 1.0 / information, weights
+
+
+def transition(dt: float) -> np.ndarray:
+    """A of eq. (9) over dt."""
+    return np.array([[1.0, dt, dt * dt / 2.0], [0.0, 1.0, dt], [0.0, 0.0, 1.0]])
+
+
+def white_jerk_noise(dt: float, jerk_psd: float) -> np.ndarray:
+    """Process noise of a white jerk of spectral density q over dt (not in the paper)."""
+    return jerk_psd * np.array([
+        [dt**5 / 20.0, dt**4 / 8.0, dt**3 / 6.0],
+        [dt**4 / 8.0, dt**3 / 3.0, dt**2 / 2.0],
+        [dt**3 / 6.0, dt**2 / 2.0, dt],
+    ])
+
+
+@dataclass(frozen=True)
+class YangParams:
+    R_gps: float = param(900.0, "m2", "GPS height variance σ_GPS² (Section 4.2: 30 m)",
+                         positive=True)
+    R_baro: float = param(400.0, "m2", "Baro height variance σ_ba² (Section 4.2: 20 m)",
+                          positive=True)
+    R_radar: float = param(100.0, "m2", "Radio-altimeter variance σ_ra² (Section 4.2: 10 m)",
+                           positive=True)
+    R_gps_vz: float = param(0.04, "m2/s2", "GPS vertical-speed variance (Section 4.2: "
+                                           "0.2 m/s)", positive=True)
+    R_acc: float = param(1e-4, "m2/s4", "IMU acceleration variance (Section 4.2: 0.01 m/s²)",
+                         positive=True)
+    jerk_psd: float = param(0.01, "m2/s5", "Spectral density of the white jerk added to eq. "
+                                           "(11); the paper has no process noise (NOTES.md)",
+                            positive=True)
+    terrain_h: float = param(0.0, "m", "Q_sealevel of eq. (6): terrain height under the radio "
+                                       "altimeter (seed 003: sea level)")
+    max_sample_age: float = param(0.5, "s", "A height sensor takes part in a fusion while its "
+                                            "last sample is at most this old", positive=True)
+    P0_vz: float = param(100.0, "m2/s2", "Initial vertical-speed variance", positive=True)
+    P0_az: float = param(1.0, "m2/s4", "Initial acceleration variance", positive=True)
+    gate_sigma: float = param(5.0, "1", "Gate on each height sample against the predicted "
+                                        "height, in standard deviations (0: off); not in the "
+                                        "paper", min=0.0)
+
+
+class YangFusionKF(Estimator):
+    """Yang et al.'s altitude measurement (seed 003): time-unified, optimally weighted
+    GPS/baro/radio-altimeter heights and a height/speed/acceleration Kalman filter."""
+
+    Params = YangParams
+    streams = (BARO_TIMED, GPS_VZ_TIMED, RADAR_TIMED, ACC)
+
+    def initialize_filter(self) -> None:
+        p = self.params
+        self.x = np.zeros(3)
+        self.P = np.diag([p.R_baro, p.P0_vz, p.P0_az])
+        self.started = False
+        self.history = {name: deque(maxlen=2) for name in HEIGHT_SENSORS}
+        self.variances = {"radar": p.R_radar, "gps": p.R_gps, "baro": p.R_baro}
+        self.h_fused = 0.0
+        self.fused_std = 0.0
+        self.weights = dict.fromkeys(HEIGHT_SENSORS, 0.0)
+        self._stale: set[str] = set()
+        self._publish()
+
+    def propagate(self, dt: float) -> None:
+        """Eqs. (10)-(11) with the white-jerk process noise."""
+        self.x, self.P = predict(self.x, self.P, transition(dt),
+                                 white_jerk_noise(dt, self.params.jerk_psd))
+        self._publish()
+
+    def fuse_samples(self, samples) -> None:
+        """Gate and store the new heights, fuse at a benchmark sample, then one KF update."""
+        heights = {"baro": (samples.get(BARO_TIMED), "baro_h", "baro_time"),
+                   "gps": (samples.get(GPS_VZ_TIMED), "gps_h", "gps_time"),
+                   "radar": (samples.get(RADAR_TIMED), "radar_h", "radar_time")}
+        arrived = set()
+        for name, (sample, value, stamp) in heights.items():
+            if sample is None:
+                continue
+            z = sample[value] + (self.params.terrain_h if name == "radar" else 0.0)   # (6)
+            if sample[stamp] < self.time - self.params.max_sample_age and name not in self._stale:
+                self._stale.add(name)
+                self.note(f"{name}: sample stamped {sample[stamp]!r} s arrives older than "
+                          f"max_sample_age; it cannot take part in a fusion (is {stamp} set?)")
+            if self._gate(name, z):
+                self.history[name].append((sample[stamp], z))
+                arrived.add(name)
+        measurements = []                                   # (row of H = I, value, variance)
+        benchmark = self._benchmark()
+        if benchmark in arrived:
+            self._fuse_heights(self.history[benchmark][-1][0])
+            if self.started:
+                measurements.append((0, self.h_fused, self.fused_std**2))
+            else:
+                self._start()
+        gps = samples.get(GPS_VZ_TIMED)
+        if gps is not None:
+            measurements.append((1, gps["gps_vz"], self.params.R_gps_vz))
+        acc = samples.get(ACC)
+        if acc is not None:
+            measurements.append((2, acc["acc_z"], self.params.R_acc))
+        if measurements:
+            rows, z, R = zip(*measurements, strict=True)
+            result = update(self.x, self.P, np.array(z), IDENTITY[list(rows)],
+                            np.diag(R))                                        # (12)-(14)
+            self.x, self.P = result.x, result.P
+        self._publish()
+
+    def _gate(self, name: str, z: float) -> bool:
+        """True if the height sample may enter the fusion (always before the filter starts)."""
+        if not self.started:
+            return True
+        innovation = z - float(self.x[0])
+        variance = float(self.P[0, 0]) + self.variances[name]
+        if scalar_gate(innovation, variance, self.params.gate_sigma):
+            return True
+        stream = {"baro": BARO_TIMED, "gps": GPS_VZ_TIMED, "radar": RADAR_TIMED}[name]
+        self.reject(stream, innovation, math.sqrt(variance))
+        return False
+
+    def _benchmark(self) -> str | None:
+        """The first live height sensor in order of decreasing sampling period (Section 4.2)."""
+        now = self.time
+        for name in HEIGHT_SENSORS:
+            history = self.history[name]
+            if history and history[-1][0] >= now - self.params.max_sample_age:
+                return name
+        return None
+
+    def _fuse_heights(self, t_b: float) -> None:
+        """Eqs. (5)-(8): unify the live sensors' heights to t_b and fuse them with weights."""
+        live = {name: unify_time(history, t_b) for name, history in self.history.items()
+                if history and history[-1][0] >= t_b - self.params.max_sample_age}     # (5)
+        self.h_fused, variance, weights = weighted_fusion(live, self.variances)      # (7), (8)
+        self.fused_std = math.sqrt(variance)
+        self.weights = {name: weights.get(name, 0.0) for name in HEIGHT_SENSORS}
+
+    def _start(self) -> None:
+        """Start the filter at the first fusion: h = y, Var h = σ_y², uncorrelated."""
+        self.x[0] = self.h_fused
+        self.P[0, :] = 0.0
+        self.P[:, 0] = 0.0
+        self.P[0, 0] = self.fused_std**2
+        self.started = True
+
+    def _publish(self) -> None:
+        self.h_est, self.vz_est, self.az_est = (float(v) for v in self.x)
+        self.h_std = math.sqrt(float(self.P[0, 0]))
+        self.weight_gps = self.weights["gps"]
+        self.weight_baro = self.weights["baro"]
+        self.weight_radar = self.weights["radar"]

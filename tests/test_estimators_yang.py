@@ -1,0 +1,181 @@
+"""YangFusionKF (seed 003) on synthetic data: time unification, weighted fusion, 3-state KF."""
+
+import math
+
+import numpy as np
+import pytest
+from stream_feeder import StreamFeeder
+
+from altfusion.errors import ParameterError
+from altfusion.estimators.yang import (
+    YangFusionKF,
+    YangParams,
+    unify_time,
+    weighted_fusion,
+)
+from altfusion.physics.profiles import make_profile
+
+PAPER_FUSED_STD = (1.0 / 30**2 + 1.0 / 20**2 + 1.0 / 10**2) ** -0.5
+"""Section 3.2 with Section 4.2's sensors: 8.57 m."""
+
+
+def test_time_unification_is_the_corrected_eq_5():
+    """NOTES.md: Q_tb = Q_ta + (t_b - t_a)(Q_ta - Q_tc)/(t_a - t_c) (the printed eq. 5
+    multiplies by t_b instead of t_b - t_a)."""
+    history = [(10.0, 100.0), (10.1, 101.2)]
+    assert unify_time(history, 10.15) == pytest.approx(101.8)
+    assert unify_time(history, 10.1) == 101.2
+    assert unify_time(history[1:], 10.15) == 101.2  # one sample: held
+
+
+def test_weighted_fusion_weights_by_inverse_variance_and_reaches_the_bound():
+    y, variance, weights = weighted_fusion({"gps": 30.0, "baro": 20.0, "radar": 10.0},
+                                           {"gps": 900.0, "baro": 400.0, "radar": 100.0})
+    assert math.sqrt(variance) == pytest.approx(PAPER_FUSED_STD) == pytest.approx(8.57, abs=5e-3)
+    assert weights == pytest.approx({"gps": 4 / 49, "baro": 9 / 49, "radar": 36 / 49})
+    assert y == pytest.approx((4 * 30 + 9 * 20 + 36 * 10) / 49)
+
+
+def paper_run(seed: int = 1):
+    """Section 4 with clocks aligned (NOTES.md): profile yang2020, GPS 30 m / 0.2 m/s every
+    100 ms, baro 20 m every 10 ms, radio altimeter 10 m every 200 ms, IMU 0.01 m/s² every
+    10 ms; the estimator stepped every 10 ms. Errors by source: each sensor's samples, the
+    weighted fusion at each fusion, the KF at each step; and the KF's own variances."""
+    rng = np.random.default_rng(seed)
+    profile = make_profile("yang2020")
+    estimator = YangFusionKF(step_size=0.01)
+    feeder = StreamFeeder(estimator)
+    errors = {name: [] for name in ("gps", "baro", "radar", "fused", "kf")}
+    kf_variance = []
+    for k in range(42000):
+        h, vz, az = profile.reference(0.01 * (k + 1))
+        samples = {"baro": {"baro_h": h + 20.0 * rng.standard_normal()},
+                   "acc": {"acc_z": az + 0.01 * rng.standard_normal()}}
+        if (k + 1) % 10 == 0:
+            samples["gps"] = {"gps_h": h + 30.0 * rng.standard_normal(),
+                              "gps_vz": vz + 0.2 * rng.standard_normal()}
+        if (k + 1) % 20 == 0:
+            samples["radar"] = {"radar_h": h + 10.0 * rng.standard_normal()}
+        feeder.step(**samples)
+        for name, sample in samples.items():
+            if name in errors:
+                errors[name].append(sample[f"{name}_h"] - h)
+        if "radar" in samples:
+            errors["fused"].append(estimator.h_fused - h)
+        errors["kf"].append(estimator.h_est - h)
+        kf_variance.append(estimator.h_std**2)
+    return {name: np.array(e) for name, e in errors.items()}, np.array(kf_variance), estimator
+
+
+@pytest.fixture(scope="module")
+def paper():
+    return paper_run()
+
+
+def test_weighted_fusion_has_the_theoretical_accuracy(paper):
+    """2100 fusions (one per radar sample) of independent errors: the sample standard
+    deviation has a standard error 8.57/√(2·2100) = 0.13 m; 99.9 % interval ±0.43 m."""
+    errors, _, estimator = paper
+    assert len(errors["fused"]) == 2100
+    assert errors["fused"].std() == pytest.approx(PAPER_FUSED_STD, abs=0.43)
+    assert estimator.fused_std == pytest.approx(PAPER_FUSED_STD)
+    assert estimator.weight_radar == pytest.approx(36 / 49)
+
+
+def test_kalman_filter_beats_every_sensor_and_the_fusion_by_a_wide_margin(paper):
+    """Eq. (15) accuracy over the flight (after the first 10 s): the KF is better than the
+    weighted fusion by more than a factor 10 (0.30 m against 8.5 m for this seed)."""
+    errors, _, _ = paper
+    kf = float(np.sqrt(np.mean(errors["kf"][1000:] ** 2)))
+    fused = float(np.sqrt(np.mean(errors["fused"] ** 2)))
+    assert kf < 0.1 * fused
+    assert fused < min(float(np.sqrt(np.mean(errors[s] ** 2))) for s in ("gps", "baro", "radar"))
+
+
+def test_kalman_filter_std_is_honest_within_a_factor_of_two(paper):
+    errors, variance, _ = paper
+    ratio = math.sqrt(np.mean(errors["kf"][1000:] ** 2) / np.mean(variance[1000:]))
+    assert 0.5 < ratio < 2.0
+
+
+def test_time_unification_brings_delayed_samples_to_the_benchmark_time():
+    """Noise-free climb at 12 m/s over terrain at 100 m: GPS stamped 50 ms and the baro 5 ms
+    before the radar's sample time. Eq. (5) is exact for linear motion, so the fusion equals
+    the true height at the radar's time; unaligned samples would be off by up to 0.6 m."""
+    estimator = YangFusionKF(YangParams(terrain_h=100.0), step_size=0.01)
+    feeder = StreamFeeder(estimator)
+
+    def height(t):
+        return 500.0 + 12.0 * t
+
+    for k in range(200):
+        t = 0.01 * (k + 1)
+        samples = {"baro": {"baro_h": height(t - 0.005), "baro_time": t - 0.005}}
+        if (k + 1) % 10 == 0:
+            samples["gps"] = {"gps_h": height(t - 0.05), "gps_vz": 12.0, "gps_time": t - 0.05}
+        if (k + 1) % 20 == 0:
+            samples["radar"] = {"radar_h": height(t) - 100.0, "radar_time": t}
+        feeder.step(**samples)
+        if "radar" in samples and k > 20:
+            assert estimator.h_fused == pytest.approx(height(t), abs=1e-9)
+            assert estimator.weight_gps > 0.0 and estimator.weight_baro > 0.0
+
+
+def test_fusion_falls_back_to_gps_and_baro_while_the_radar_is_out():
+    rng = np.random.default_rng(2)
+    estimator = YangFusionKF(step_size=0.01)
+    feeder = StreamFeeder(estimator)
+    for k in range(2000):
+        radar_valid = k < 1000
+        samples = {"baro": {"baro_h": 300.0 + 20.0 * rng.standard_normal()}}
+        if (k + 1) % 10 == 0:
+            samples["gps"] = {"gps_h": 300.0 + 30.0 * rng.standard_normal(), "gps_vz": 0.0}
+        if (k + 1) % 20 == 0:
+            samples["radar"] = {"radar_h": 300.0 + 10.0 * rng.standard_normal(),
+                                "radar_valid": radar_valid}
+        feeder.step(**samples)
+        if k == 999:
+            assert estimator.weight_radar > 0.7
+    assert estimator.weight_radar == 0.0
+    assert estimator.fused_std == pytest.approx((1 / 900 + 1 / 400) ** -0.5)   # 16.6 m
+    assert estimator.h_est == pytest.approx(300.0, abs=3.0 * estimator.h_std)
+
+
+def test_a_height_sample_far_from_the_prediction_is_rejected_and_noted():
+    rng = np.random.default_rng(4)
+    estimator = YangFusionKF(step_size=0.01)
+    feeder = StreamFeeder(estimator)
+    for k in range(1000):
+        feeder.step(baro={"baro_h": 300.0 + 20.0 * rng.standard_normal()},
+                    radar={"radar_h": 300.0 + 10.0 * rng.standard_normal()}
+                    if (k + 1) % 20 == 0 else None)
+    estimator.take_notes()
+    feeder.step(baro={"baro_h": 300.0}, radar={"radar_h": 1300.0})
+    assert estimator.n_rejected == 1
+    assert any("radar: sample rejected" in note for note in estimator.take_notes())
+    assert estimator.h_est == pytest.approx(300.0, abs=5.0)
+
+
+def test_samples_without_time_stamps_are_noted_once_and_cannot_fuse():
+    """A radar whose radar_time input is left unconnected (0): its samples are too old to
+    take part; one note says why, and the fusion goes on with the live sensors."""
+    estimator = YangFusionKF(step_size=0.01)
+    feeder = StreamFeeder(estimator)
+    for k in range(300):
+        samples = {"baro": {"baro_h": 300.0}}
+        if (k + 1) % 20 == 0:
+            samples["radar"] = {"radar_h": 300.0, "radar_time": 0.0}
+        feeder.step(**samples)
+    notes = [n for n in estimator.take_notes() if "radar_time" in n]
+    assert len(notes) == 1
+    assert estimator.weight_radar == 0.0 and estimator.weight_baro == 1.0
+
+
+@pytest.mark.parametrize(("params", "name"), [
+    (YangParams(R_radar=0.0), "R_radar"),
+    (YangParams(jerk_psd=0.0), "jerk_psd"),
+    (YangParams(max_sample_age=-0.1), "max_sample_age"),
+])
+def test_invalid_parameters_are_rejected_by_name(params, name):
+    with pytest.raises(ParameterError, match=f"'{name}'"):
+        YangFusionKF(params)
