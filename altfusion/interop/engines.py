@@ -1,0 +1,373 @@
+"""Run our SSP systems in third-party co-simulation engines; record them as our Results.
+
+Engines (``ENGINES``):
+
+* ``altfusion`` / ``altfusion-jacobi``: our runner, ordered stepping or Jacobi;
+* ``libcosim``: the SSP through libcosimpy (``CosimExecution.from_ssp_file``); ``libcosim-osp``
+  the exported ``OspSystemStructure.xml`` folder (:mod:`altfusion.interop.osp`);
+* ``ecos``: the SSP through ecospy, in this process;
+* ``ecos-proxy``: ECOS's command-line host (a C++ program with no Python of its own) with every
+  FMU in its own ``proxyfmu`` process, which needs libpython preloaded (``LD_PRELOAD``);
+  its CSV has 6 decimals (``%f``).
+
+Stepping conventions (what makes the engines' trajectories differ from ours):
+
+* libcosim and ECOS are Jacobi masters: every input holds the value its source had when the
+  consumer's step started; our runner gives feedthrough inputs the source's value at the end
+  of the step. ``altfusion-jacobi`` reproduces libcosim's convention exactly.
+* A component slower than the base step is stepped at the start of its macro step by both
+  engines. libcosim exchanges and observes its outputs when the macro step ends (as we do);
+  ECOS exposes them at once, so between the slow component's steps ECOS shows (and feeds
+  faster consumers) the values of the end of the current macro step. At multiples of the
+  component's own step the values are the same.
+
+Engines may unload and reload FMU libraries, which pythonfmu does not survive in one process:
+:func:`run_in_subprocess` runs one engine in a fresh Python and reads back its CSV.
+"""
+
+import csv
+import os
+import shutil
+import site
+import subprocess
+import sys
+import sysconfig
+import tempfile
+import zipfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from altfusion.cosim.instances import FMI_TYPES, fmu_info
+from altfusion.cosim.results import Results
+from altfusion.cosim.runner import simulate
+from altfusion.cosim.ssp import read_ssp
+from altfusion.cosim.system import SystemSpec
+from altfusion.timegrid import TickClock
+
+ENGINES = ("altfusion", "altfusion-jacobi", "libcosim", "libcosim-osp", "ecos", "ecos-proxy")
+
+SSP_PARAMETER_SET = "parameters"
+"""Name of the parameter set our SSP writer binds to every component."""
+
+
+class EngineError(RuntimeError):
+    """A third-party engine refused the system or failed while running it."""
+
+
+@dataclass(frozen=True)
+class Signal:
+    path: str
+    component: str
+    variable: str
+    type: str
+    unit: str
+
+
+@dataclass(frozen=True)
+class Recording:
+    """What to record and when: the system's signals on its output grid."""
+
+    signals: tuple[Signal, ...]
+    every: int
+    """Base steps between two recorded rows."""
+    rows: int
+    clock: TickClock
+
+    @classmethod
+    def of(cls, system: SystemSpec, fmu_paths: dict[str, Path],
+           stop_time: float | None = None) -> "Recording":
+        if system.start_time != 0.0:
+            raise EngineError(f"{system.name}: third-party runs start at t = 0 s")
+        infos = {c.name: fmu_info(fmu_paths[c.fmu]) for c in system.components}
+        paths = list(system.record) or [
+            f"{c.name}.{v.name}" for c in system.components
+            for v in infos[c.name].variables.values()
+            if v.causality == "output" and v.type in FMI_TYPES]
+        signals = []
+        for path in paths:
+            component, _, variable = path.partition(".")
+            var = infos[component].variables[variable]
+            signals.append(Signal(path, component, variable, var.type, var.unit or ""))
+        clock = TickClock(system.base_step, 0.0, name="base_step")
+        stop = system.stop_time if stop_time is None else stop_time
+        steps = clock.ticks_in(stop, "stop_time")
+        every = clock.ticks_in(system.output_interval or system.base_step, "output_interval",
+                               allow_zero=False)
+        return cls(tuple(signals), every, steps // every + 1, clock)
+
+    def results(self, rows: list[list[float]]) -> Results:
+        data = np.asarray(rows, dtype=float)
+        times = np.array([self.clock.time(n * self.every) for n in range(len(rows))])
+        columns = {s.path: data[:, i] for i, s in enumerate(self.signals)}
+        return Results(times, columns, {s.path: s.unit for s in self.signals})
+
+
+# ---------------------------------------------------------------------------- our runner
+def run_altfusion(ssp: Path, stop_time: float | None = None, master: str = "ordered") -> Results:
+    loaded = read_ssp(ssp)
+    return simulate(loaded.spec, loaded.fmu_paths, stop_time=stop_time, master=master)
+
+
+# ---------------------------------------------------------------------------- libcosim
+def _time_series(observer, read, index: int, reference: int, steps: int) -> np.ndarray:
+    """Samples of steps 0..steps from a time-series observer.
+
+    libcosimpy 0.0.6 trims a sample list by counting step numbers equal to 0, which drops the
+    genuine sample of step 0 from a longer read: step 0 is read alone (asking for two samples
+    returns exactly it), then steps 1..steps."""
+    _, first_step, first = read(index, reference, 0, 2)
+    _, numbers, rest = read(index, reference, 1, steps)
+    if list(first_step) != [0] or list(numbers) != list(range(1, steps + 1)):
+        raise EngineError("libcosim's time-series observer lost samples")
+    return np.asarray([*first, *rest], dtype=float)
+
+
+def run_libcosim(source: Path, system: SystemSpec, fmu_paths: dict[str, Path],
+                 stop_time: float | None = None) -> Results:
+    """Run an ``.ssp`` archive or an OSP folder in libcosim, observing the recorded signals.
+
+    Real and Integer signals come from a time-series observer holding every step, which also
+    has the initial values (step 0). Boolean signals come from a last-value observer, which
+    has no values before the first step: their t = 0 row is NaN."""
+    from libcosimpy.CosimEnums import CosimVariableType
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+    from libcosimpy.CosimObserver import CosimObserver
+
+    recording = Recording.of(system, fmu_paths, stop_time)
+    log_output_level(CosimLogLevel.WARNING)
+    source = Path(source)
+    try:
+        if source.is_dir() or source.suffix == ".xml":
+            execution = CosimExecution.from_osp_config_file(str(source))
+        else:
+            execution = CosimExecution.from_ssp_file(str(source))
+    except AssertionError as error:
+        raise EngineError(f"libcosim cannot load {source}: {error}") from None
+    steps = (recording.rows - 1) * recording.every
+    series = CosimObserver.create_time_series(buffer_size=steps + 1)
+    last = CosimObserver.create_last_value()
+    execution.add_observer(series)
+    execution.add_observer(last)
+    kinds = {"Real": CosimVariableType.REAL, "Integer": CosimVariableType.INTEGER,
+             "Boolean": CosimVariableType.BOOLEAN}
+    slots = []
+    for signal in recording.signals:
+        index = execution.slave_index_from_instance_name(signal.component)
+        if index is None:
+            raise EngineError(f"libcosim: no simulator '{signal.component}' in {source}")
+        var = {v.name.decode(): v for v in execution.slave_variables(index)}[signal.variable]
+        if var.type != kinds[signal.type].value:
+            raise EngineError(f"libcosim: {signal.path} is not of type {signal.type}")
+        if signal.type != "Boolean":
+            series.start_time_series(index, var.reference, kinds[signal.type])
+        slots.append((signal.type, index, var.reference))
+    booleans = [(i, index, ref) for i, (kind, index, ref) in enumerate(slots)
+                if kind == "Boolean"]
+    data = np.full((recording.rows, len(slots)), np.nan)
+    chunks = [recording.every] * (recording.rows - 1) if booleans else [steps]
+    row = 0
+    for chunk in chunks:
+        if not execution.step(chunk):
+            from libcosimpy._internal import get_last_error_message
+            raise EngineError(f"libcosim step failed: {get_last_error_message()}")
+        row += chunk // recording.every
+        for i, index, ref in booleans:
+            data[row, i] = float(last.last_boolean_values(index, [ref])[0])
+    readers = {"Real": series.time_series_real_samples,
+               "Integer": series.time_series_integer_samples}
+    for i, (kind, index, ref) in enumerate(slots):
+        if kind != "Boolean":
+            data[:, i] = _time_series(series, readers[kind], index, ref, steps)[::recording.every]
+    return recording.results(data.tolist())
+
+
+# ---------------------------------------------------------------------------- ECOS
+def _parameter_set_names(ssp: Path) -> set[str]:
+    from lxml import etree
+
+    with zipfile.ZipFile(ssp) as archive:
+        root = etree.fromstring(archive.read("SystemStructure.ssd"))
+    ssv = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"
+    return {e.get("name") for e in root.iter(f"{{{ssv}}}ParameterSet")}
+
+
+def run_ecos(ssp: Path, system: SystemSpec, fmu_paths: dict[str, Path],
+             stop_time: float | None = None) -> Results:
+    """Run an ``.ssp`` archive in ECOS (ecospy), in this process."""
+    from ecospy import EcosLib, EcosSimulation
+
+    recording = Recording.of(system, fmu_paths, stop_time)
+    EcosLib.set_log_level("warn")
+    simulation = EcosSimulation(ssp_path=str(ssp), step_size=system.base_step)
+    getters = {"Real": simulation.get_real, "Integer": simulation.get_integer,
+               "Boolean": simulation.get_bool}
+    slots = [(getters[s.type], f"{s.component}::{s.variable}") for s in recording.signals]
+    try:
+        names = _parameter_set_names(ssp)
+        simulation.init(parameter_set=SSP_PARAMETER_SET if SSP_PARAMETER_SET in names else None)
+
+        def sample() -> list[float]:
+            return [float(get(identifier)) for get, identifier in slots]
+
+        rows = [sample()]
+        for _ in range(recording.rows - 1):
+            simulation.step(recording.every)
+            rows.append(sample())
+        simulation.terminate()
+    finally:
+        simulation.free()
+    return recording.results(rows)
+
+
+def libpython() -> Path:
+    """This interpreter's shared libpython, which a non-Python host must preload."""
+    library = Path(sysconfig.get_config_var("LIBDIR") or "") / (
+        sysconfig.get_config_var("INSTSONAME") or "")
+    if not library.is_file():
+        raise EngineError(f"{sys.executable} has no shared libpython ({library}): pythonfmu "
+                          f"FMUs need a Python built with --enable-shared in non-Python hosts")
+    return library
+
+
+def python_environment() -> dict[str, str]:
+    """What a non-Python host needs to run our FMUs: libpython preloaded, this Python's home
+    and the site-packages that hold numpy."""
+    paths = [*site.getsitepackages(), *os.environ.get("PYTHONPATH", "").split(os.pathsep)]
+    return {
+        "LD_PRELOAD": str(libpython()),
+        "PYTHONHOME": sys.base_prefix,
+        "PYTHONPATH": os.pathsep.join(p for p in paths if p),
+    }
+
+
+def ecos_binaries() -> Path:
+    """ecospy's bundled ``ecos`` and ``proxyfmu`` executables, made executable if needed (the
+    wheel may ship them without the executable bit)."""
+    import ecospy
+
+    folder = Path(ecospy.__file__).parent / "binaries"
+    executables = [folder / "ecos", folder / "proxyfmu"]
+    if all(os.access(p, os.X_OK) for p in executables):
+        return folder
+    try:
+        for path in executables:
+            path.chmod(path.stat().st_mode | 0o111)
+        return folder
+    except PermissionError:
+        copy = Path(tempfile.mkdtemp(prefix="altfusion_ecos_"))
+        for path in executables:
+            shutil.copy2(path, copy / path.name)
+            (copy / path.name).chmod(0o755)
+        return copy
+
+
+def proxy_ssp(ssp: Path, target: Path) -> Path:
+    """A copy of ``ssp`` whose components ECOS loads through ``proxyfmu`` (one process each)."""
+    with zipfile.ZipFile(ssp) as source, zipfile.ZipFile(target, "w",
+                                                         zipfile.ZIP_DEFLATED) as copy:
+        for item in source.infolist():
+            data = source.read(item.filename)
+            if item.filename == "SystemStructure.ssd":
+                data = data.replace(b'source="resources/',
+                                    b'source="proxyfmu://localhost?file=resources/')
+            copy.writestr(item, data)
+    return target
+
+
+def _ecos_csv_config(recording: Recording, path: Path) -> Path:
+    lines = ['<?xml version="1.0" encoding="UTF-8"?>',
+             f'<ecos:CsvConfig xmlns:ecos="urn:ecos" decimationFactor="{recording.every}">',
+             "  <ecos:components>"]
+    by_component: dict[str, list[str]] = {}
+    for signal in recording.signals:
+        by_component.setdefault(signal.component, []).append(signal.variable)
+    for component, variables in by_component.items():
+        lines.append(f'    <ecos:component name="{component}">')
+        lines += [f'      <ecos:variable name="{v}"/>' for v in variables]
+        lines.append("    </ecos:component>")
+    lines += ["  </ecos:components>", "</ecos:CsvConfig>"]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+ECOS_CSV_TYPES = {"Real": "REAL", "Integer": "INT", "Boolean": "BOOL"}
+
+
+def run_ecos_proxy(ssp: Path, system: SystemSpec, fmu_paths: dict[str, Path],
+                   stop_time: float | None = None, timeout: float = 600.0) -> Results:
+    """Run ``ssp`` with ECOS's command-line host, each FMU in its own ``proxyfmu`` process.
+
+    The host and the proxies are C++ programs: pythonfmu's library finds Python only because
+    libpython is preloaded (:func:`python_environment`)."""
+    recording = Recording.of(system, fmu_paths, stop_time)
+    binaries = ecos_binaries()
+    stop = recording.clock.time((recording.rows - 1) * recording.every)
+    with tempfile.TemporaryDirectory(prefix="altfusion_ecos_proxy_") as work:
+        work = Path(work)
+        proxied = proxy_ssp(ssp, work / f"{system.name}.ssp")
+        config = _ecos_csv_config(recording, work / "csv_config.xml")
+        command = [str(binaries / "ecos"), "simulate", "--path", str(proxied),
+                   "--stepSize", repr(system.base_step), "--stopTime", repr(stop),
+                   "--csvConfig", str(config), "--noParallel", "--logLevel", "warn"]
+        if SSP_PARAMETER_SET in _parameter_set_names(ssp):
+            command += ["--parameterSet", SSP_PARAMETER_SET]
+        completed = subprocess.run(command, cwd=work, env={**os.environ, **python_environment()},
+                                   capture_output=True, text=True, timeout=timeout)
+        output = work / f"{system.name}.csv"
+        if completed.returncode != 0 or not output.exists():
+            raise EngineError(f"ecos simulate failed ({completed.returncode}):\n"
+                              f"{completed.stdout[-3000:]}\n{completed.stderr[-3000:]}")
+        with open(output, newline="") as handle:
+            reader = csv.reader(handle, skipinitialspace=True)
+            header = next(reader)
+            table = [row for row in reader if row]
+    column = {name: i for i, name in enumerate(header)}
+    indices = [column[f"{s.component}::{s.variable}[{ECOS_CSV_TYPES[s.type]}]"]
+               for s in recording.signals]
+    rows = [[float(row[i]) for i in indices] for row in table[:recording.rows]]
+    if len(rows) != recording.rows:
+        raise EngineError(f"ecos wrote {len(rows)} rows, expected {recording.rows}")
+    return recording.results(rows)
+
+
+# ---------------------------------------------------------------------------- dispatch
+def run_engine(engine: str, ssp: Path, stop_time: float | None = None,
+               osp: Path | None = None) -> Results:
+    """Run the system of ``ssp`` in ``engine`` (``libcosim-osp`` runs the folder ``osp``)."""
+    if engine not in ENGINES:
+        raise ValueError(f"unknown engine {engine!r}; known: {ENGINES}")
+    if engine in ("altfusion", "altfusion-jacobi"):
+        master = "jacobi" if engine.endswith("jacobi") else "ordered"
+        return run_altfusion(ssp, stop_time, master)
+    loaded = read_ssp(ssp)
+    system, fmu_paths = loaded.spec, loaded.fmu_paths
+    if engine == "libcosim":
+        return run_libcosim(ssp, system, fmu_paths, stop_time)
+    if engine == "libcosim-osp":
+        if osp is None:
+            raise ValueError("engine libcosim-osp needs the OSP folder")
+        return run_libcosim(osp, system, fmu_paths, stop_time)
+    if engine == "ecos":
+        return run_ecos(ssp, system, fmu_paths, stop_time)
+    return run_ecos_proxy(ssp, system, fmu_paths, stop_time)
+
+
+def run_in_subprocess(engine: str, ssp: Path, stop_time: float | None = None,
+                      osp: Path | None = None, timeout: float = 900.0) -> Results:
+    """:func:`run_engine` in a fresh Python process (engines may unload FMU libraries)."""
+    with tempfile.TemporaryDirectory(prefix="altfusion_engine_") as work:
+        out = Path(work) / "results.csv"
+        command = [sys.executable, "-m", "altfusion.interop", "run", "--engine", engine,
+                   str(ssp), "--csv", str(out)]
+        if stop_time is not None:
+            command += ["--stop", repr(stop_time)]
+        if osp is not None:
+            command += ["--osp", str(osp)]
+        completed = subprocess.run(command, capture_output=True, text=True, timeout=timeout)
+        if completed.returncode != 0 or not out.exists():
+            raise EngineError(f"{engine} run of {ssp} failed ({completed.returncode}):\n"
+                              f"{completed.stdout[-3000:]}\n{completed.stderr[-3000:]}")
+        return Results.from_csv(out)
