@@ -5,7 +5,9 @@ The container embeds the members' FMUs (each under its component name), sets the
 
 * an input ``component.variable`` for every member input driven from outside the subsystem;
 * an output ``component.variable`` for every recorded member output and every member output
-  that drives a component outside the subsystem.
+  that drives a component outside the subsystem (an output that also feeds another member is
+  the container's local variable of the link instead, which the toolbox names
+  ``component.variable`` with the component name in lower case).
 
 The container steps its members one after the other ("sequential" mode) in our runner's
 upstream-first order, so each member sees the outputs its upstream members just computed: the
@@ -56,6 +58,8 @@ class ContainerSpec:
     feedthrough_inputs: frozenset[str]
     """Inputs our runner reads at the end of the step (some output depends on them)."""
     outputs: tuple[str, ...]
+    variables: dict[str, str]
+    """Output ('component.variable') -> the container variable that carries it."""
     units: dict[str, str]
 
 
@@ -105,7 +109,7 @@ def build_container(system: SystemSpec, members: list[str], fmu_paths: dict[str,
     path = Path(path)
     node = AssemblyNode(path.name, step_size=step, sequential=True, auto_link=False,
                         auto_input=False, auto_output=False)
-    inputs, input_types, feedthrough, outputs = {}, {}, set(), []
+    inputs, input_types, feedthrough, outputs, linked = {}, {}, set(), [], set()
     with tempfile.TemporaryDirectory(prefix="altfusion_container_") as work:
         work = Path(work)
         for name in order:
@@ -124,6 +128,7 @@ def build_container(system: SystemSpec, members: list[str], fmu_paths: dict[str,
                         f"the value from the start of the step, but {source} steps before "
                         f"{target} in the container")
                 node.add_link(f"{source}.fmu", source_var, f"{target}.fmu", target_var)
+                linked.add(connection.start)
             elif target in rank:
                 node.add_input(connection.end, f"{target}.fmu", target_var)
                 inputs[connection.end] = connection.start
@@ -134,9 +139,14 @@ def build_container(system: SystemSpec, members: list[str], fmu_paths: dict[str,
                 outputs.append(connection.start)
         outputs += [s for s in system.record
                     if s.partition(".")[0] in rank and s not in outputs]
+        variables = {}
         for output in outputs:
             component, _, variable = output.partition(".")
-            node.add_output(f"{component}.fmu", variable, output)
+            if output in linked:
+                variables[output] = f"{component.lower()}.{variable}"
+            else:
+                node.add_output(f"{component}.fmu", variable, output)
+                variables[output] = output
         toolbox_log = logging.getLogger("fmu_manipulation_toolbox")
         level = toolbox_log.level
         toolbox_log.setLevel(logging.ERROR)
@@ -151,7 +161,7 @@ def build_container(system: SystemSpec, members: list[str], fmu_paths: dict[str,
         component, _, variable = output.partition(".")
         units[output] = infos[component].variables[variable].unit or ""
     return ContainerSpec(path, step, tuple(order), inputs, input_types,
-                         frozenset(feedthrough), tuple(outputs), units)
+                         frozenset(feedthrough), tuple(outputs), variables, units)
 
 
 def input_table(container: ContainerSpec, driving: Results, stop_time: float) -> np.ndarray:
@@ -159,7 +169,9 @@ def input_table(container: ContainerSpec, driving: Results, stop_time: float) ->
 
     ``driving`` must hold every source of :attr:`ContainerSpec.inputs` on the container's
     step grid. Row n (t_n = n·step, as fmpy computes it) is applied before the step to
-    t_(n+1): it carries the source at t_(n+1) for a feedthrough input, at t_n otherwise."""
+    t_(n+1): it carries the source at t_(n+1) for a feedthrough input, at t_n otherwise. fmpy
+    also applies row 0 during initialization, so the container's initial outputs see the
+    feedthrough inputs of t_1."""
     clock = TickClock(container.step_size, 0.0)
     steps = clock.ticks_in(stop_time, "stop_time")
     expected = np.array([clock.time(n) for n in range(steps + 1)])
@@ -205,7 +217,7 @@ def simulate_in_subprocess(container: ContainerSpec, stop_time: float,
         command = [sys.executable, "-m", "altfusion.interop", "simulate-fmu",
                    str(container.path), "--step", repr(container.step_size),
                    "--stop", repr(stop_time), "--csv", str(out)]
-        command += [f"--output={name}" for name in container.outputs]
+        command += [f"--output={container.variables[name]}" for name in container.outputs]
         if inputs is not None:
             np.save(Path(work) / "inputs.npy", inputs)
             command += ["--input", str(Path(work) / "inputs.npy")]
@@ -214,6 +226,6 @@ def simulate_in_subprocess(container: ContainerSpec, stop_time: float,
             raise ContainerError(f"simulating {container.path.name} failed "
                                  f"({completed.returncode}):\n{completed.stdout[-3000:]}\n"
                                  f"{completed.stderr[-3000:]}")
-        results = Results.from_csv(out)
-    results.units.update(container.units)
-    return results
+        raw = Results.from_csv(out)
+    columns = {name: raw[container.variables[name]] for name in container.outputs}
+    return Results(raw.time, columns, dict(container.units))

@@ -111,26 +111,28 @@ def run_altfusion(ssp: Path, stop_time: float | None = None, master: str = "orde
 
 
 # ---------------------------------------------------------------------------- libcosim
-def _time_series(observer, read, index: int, reference: int, steps: int) -> np.ndarray:
-    """Samples of steps 0..steps from a time-series observer.
+def _time_series(read, index: int, reference: int, steps: int) -> tuple[np.ndarray, np.ndarray]:
+    """(step numbers, values) of the samples a time-series observer holds for a variable.
 
-    libcosimpy 0.0.6 trims a sample list by counting step numbers equal to 0, which drops the
-    genuine sample of step 0 from a longer read: step 0 is read alone (asking for two samples
-    returns exactly it), then steps 1..steps."""
+    libcosim reads a range of *steps* (a slower simulator has samples only at the steps it
+    completes, and none at step 0), and libcosimpy 0.0.6 trims the result by counting step
+    numbers equal to 0, which drops a genuine step-0 sample from a longer read: step 0 is read
+    alone (a two-step range returns exactly it), then steps 1..steps."""
     _, first_step, first = read(index, reference, 0, 2)
     _, numbers, rest = read(index, reference, 1, steps)
-    if list(first_step) != [0] or list(numbers) != list(range(1, steps + 1)):
-        raise EngineError("libcosim's time-series observer lost samples")
-    return np.asarray([*first, *rest], dtype=float)
+    return (np.asarray([*first_step, *numbers], dtype=np.int64),
+            np.asarray([*first, *rest], dtype=float))
 
 
 def run_libcosim(source: Path, system: SystemSpec, fmu_paths: dict[str, Path],
                  stop_time: float | None = None) -> Results:
     """Run an ``.ssp`` archive or an OSP folder in libcosim, observing the recorded signals.
 
-    Real and Integer signals come from a time-series observer holding every step, which also
-    has the initial values (step 0). Boolean signals come from a last-value observer, which
-    has no values before the first step: their t = 0 row is NaN."""
+    Real and Integer signals come from a time-series observer (held between the steps of a
+    slower simulator). It has no step-0 sample of a slower simulator: those initial values are
+    read from a last-value observer after the first base step, which still shows the initial
+    values of a simulator that has not completed a step. Boolean signals come from the
+    last-value observer; for a simulator at the base step their t = 0 row is NaN."""
     from libcosimpy.CosimEnums import CosimVariableType
     from libcosimpy.CosimExecution import CosimExecution
     from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
@@ -153,6 +155,8 @@ def run_libcosim(source: Path, system: SystemSpec, fmu_paths: dict[str, Path],
     execution.add_observer(last)
     kinds = {"Real": CosimVariableType.REAL, "Integer": CosimVariableType.INTEGER,
              "Boolean": CosimVariableType.BOOLEAN}
+    last_readers = {"Real": last.last_real_values, "Integer": last.last_integer_values,
+                    "Boolean": last.last_boolean_values}
     slots = []
     for signal in recording.signals:
         index = execution.slave_index_from_instance_name(signal.component)
@@ -163,24 +167,43 @@ def run_libcosim(source: Path, system: SystemSpec, fmu_paths: dict[str, Path],
             raise EngineError(f"libcosim: {signal.path} is not of type {signal.type}")
         if signal.type != "Boolean":
             series.start_time_series(index, var.reference, kinds[signal.type])
-        slots.append((signal.type, index, var.reference))
-    booleans = [(i, index, ref) for i, (kind, index, ref) in enumerate(slots)
-                if kind == "Boolean"]
-    data = np.full((recording.rows, len(slots)), np.nan)
-    chunks = [recording.every] * (recording.rows - 1) if booleans else [steps]
-    row = 0
-    for chunk in chunks:
-        if not execution.step(chunk):
+        decimated = system.component(signal.component).step_size > system.base_step
+        slots.append((signal.type, index, var.reference, decimated))
+
+    def advance(count: int) -> None:
+        if count and not execution.step(count):
             from libcosimpy._internal import get_last_error_message
             raise EngineError(f"libcosim step failed: {get_last_error_message()}")
-        row += chunk // recording.every
-        for i, index, ref in booleans:
-            data[row, i] = float(last.last_boolean_values(index, [ref])[0])
+
+    def last_value(kind: str, index: int, ref: int) -> float:
+        return float(last_readers[kind](index, [ref])[0])
+
+    data = np.full((recording.rows, len(slots)), np.nan)
+    advance(1)
+    initial = [last_value(kind, index, ref) if decimated else np.nan
+               for kind, index, ref, decimated in slots]
+    booleans = [i for i, slot in enumerate(slots) if slot[0] == "Boolean"]
+    data[0, booleans] = [initial[i] for i in booleans]
+    if booleans:
+        advance(recording.every - 1)
+        for row in range(1, recording.rows):
+            data[row, booleans] = [last_value(*slots[i][:3]) for i in booleans]
+            advance(recording.every if row < recording.rows - 1 else 0)
+    else:
+        advance(steps - 1)
+    grid = np.arange(recording.rows) * recording.every
     readers = {"Real": series.time_series_real_samples,
                "Integer": series.time_series_integer_samples}
-    for i, (kind, index, ref) in enumerate(slots):
-        if kind != "Boolean":
-            data[:, i] = _time_series(series, readers[kind], index, ref, steps)[::recording.every]
+    for i, (kind, index, ref, decimated) in enumerate(slots):
+        if kind == "Boolean":
+            continue
+        numbers, values = _time_series(readers[kind], index, ref, steps)
+        if decimated and (numbers.size == 0 or numbers[0] != 0):
+            numbers, values = np.insert(numbers, 0, 0), np.insert(values, 0, initial[i])
+        if numbers[0] != 0 or np.any(np.diff(numbers) <= 0) or numbers[-1] > steps:
+            raise EngineError(f"libcosim's time-series observer lost samples of "
+                              f"{recording.signals[i].path}")
+        data[:, i] = values[np.searchsorted(numbers, grid, side="right") - 1]
     return recording.results(data.tolist())
 
 
@@ -331,6 +354,25 @@ def run_ecos_proxy(ssp: Path, system: SystemSpec, fmu_paths: dict[str, Path],
     if len(rows) != recording.rows:
         raise EngineError(f"ecos wrote {len(rows)} rows, expected {recording.rows}")
     return recording.results(rows)
+
+
+def ecos_divergent_components(system: SystemSpec) -> set[str]:
+    """Components whose trajectories ECOS does not share with the Jacobi reference.
+
+    ECOS hands a consumer the output of a slower component as soon as that component has
+    stepped, i.e. its value at the end of the slow step under way; libcosim (and
+    ``altfusion-jacobi``) hand it the value of the last completed slow step. Every component
+    fed by such a slower-to-faster connection, directly or through other components, differs.
+    """
+    steps = {c.name: c.step_size for c in system.components}
+    edges = [(c.start.partition(".")[0], c.end.partition(".")[0]) for c in system.connections]
+    divergent = {target for source, target in edges if steps[source] > steps[target]}
+    grown = True
+    while grown:
+        reached = {target for source, target in edges if source in divergent}
+        grown = not reached <= divergent
+        divergent |= reached
+    return divergent
 
 
 # ---------------------------------------------------------------------------- dispatch
