@@ -382,10 +382,12 @@ def test_ecos_command_line_host_runs_every_fmu_in_a_proxy_process(ssp_files, eng
     libpython preloaded: it agrees with ECOS in process to the 6 decimals of its CSV
     (|Δ| ≤ 0.5e-6 + one float spacing at 1e5 Pa)."""
     system = "plant_yang2020"
-    proxy = run_in_subprocess("ecos-proxy", ssp_files[system])
+    proxy = run_in_subprocess("ecos-proxy", ssp_files[system], stop_time=60.0)
     in_process = engine_runs(system, "ecos")
+    rows = len(proxy.time)
+    assert rows == 601 and np.array_equal(proxy.time, in_process.time[:rows])
     for name in in_process.columns:
-        assert np.abs(proxy[name] - in_process[name]).max() <= 0.5e-6 + 2e-11, name
+        assert np.abs(proxy[name] - in_process[name][:rows]).max() <= 0.5e-6 + 2e-11, name
 
 
 def test_without_preloaded_libpython_the_proxy_cannot_load_the_fmus(ssp_files, tmp_path):
@@ -406,3 +408,16 @@ def test_without_preloaded_libpython_the_proxy_cannot_load_the_fmus(ssp_files, t
 def test_a_failing_engine_run_is_a_clear_error(tmp_path):
     with pytest.raises(EngineError, match="libcosim run of .* failed"):
         run_in_subprocess("libcosim", tmp_path / "missing.ssp")
+
+
+@pytest.mark.parametrize(("engine", "message"), [
+    ("libcosim", "plant: Step not complete"),
+    ("ecos", r"'plant'.*'mass' = -1\.0: must be > 0"),
+])
+def test_a_bad_parameter_fails_the_engine_run_naming_it(fmus, tmp_path, engine, message):
+    """libcosim stops on the FMU's fmi2Discard; ECOS 0.7.2 ignores it, so the ECOS adapters
+    check the parameters on the core objects first."""
+    system = build_system("plant_yang2020").with_parameters({"plant.mass": -1.0})
+    ssp = write_ssp(system, fmus, tmp_path / "bad.ssp")
+    with pytest.raises(EngineError, match=message):
+        run_in_subprocess(engine, ssp, stop_time=1.0)

@@ -39,7 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
-from altfusion.cosim.instances import FMI_TYPES, fmu_info
+from altfusion.cosim.instances import FMI_TYPES, CoreInstance, CosimError, fmu_info
 from altfusion.cosim.results import Results
 from altfusion.cosim.runner import simulate
 from altfusion.cosim.ssp import read_ssp
@@ -217,12 +217,33 @@ def _parameter_set_names(ssp: Path) -> set[str]:
     return {e.get("name") for e in root.iter(f"{{{ssv}}}ParameterSet")}
 
 
+def reject_bad_parameters(system: SystemSpec, fmu_paths: dict[str, Path]) -> None:
+    """Initialize every component's core object (no FMI) with its parameters; raise
+    :class:`EngineError` naming the first one that refuses them.
+
+    ECOS 0.7.2 ignores a doStep that returns fmi2Discard or fmi2Error: a component whose
+    initialization failed would silently stop advancing. Components whose core class cannot
+    be imported here (an FMU built from other sources) are not checked."""
+    for spec in system.components:
+        try:
+            instance = CoreInstance(spec.name, fmu_info(fmu_paths[spec.fmu]))
+        except (ImportError, AttributeError, CosimError):
+            continue
+        try:
+            instance.initialize(dict(spec.parameters), spec.step_size, system.start_time,
+                                system.stop_time)
+        except CosimError as error:
+            raise EngineError(str(error)) from None
+
+
 def run_ecos(ssp: Path, system: SystemSpec, fmu_paths: dict[str, Path],
              stop_time: float | None = None) -> Results:
-    """Run an ``.ssp`` archive in ECOS (ecospy), in this process."""
+    """Run an ``.ssp`` archive in ECOS (ecospy), in this process (parameters are checked
+    first: see :func:`reject_bad_parameters`)."""
     from ecospy import EcosLib, EcosSimulation
 
     recording = Recording.of(system, fmu_paths, stop_time)
+    reject_bad_parameters(system, fmu_paths)
     EcosLib.set_log_level("warn")
     simulation = EcosSimulation(ssp_path=str(ssp), step_size=system.base_step)
     getters = {"Real": simulation.get_real, "Integer": simulation.get_integer,
@@ -326,6 +347,7 @@ def run_ecos_proxy(ssp: Path, system: SystemSpec, fmu_paths: dict[str, Path],
     The host and the proxies are C++ programs: pythonfmu's library finds Python only because
     libpython is preloaded (:func:`python_environment`)."""
     recording = Recording.of(system, fmu_paths, stop_time)
+    reject_bad_parameters(system, fmu_paths)
     binaries = ecos_binaries()
     stop = recording.clock.time((recording.rows - 1) * recording.every)
     with tempfile.TemporaryDirectory(prefix="altfusion_ecos_proxy_") as work:
