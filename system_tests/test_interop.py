@@ -6,9 +6,10 @@ with ``master="jacobi"``: libcosim and ECOS are Jacobi masters, and running the 
 on the same inputs they must agree with it bit for bit. Our default ordered stepping differs
 from Jacobi by derived amounts, asserted below.
 
-To run a new catalog system in every engine, add its name to ``ENGINE_SYSTEMS``; to check
-the ordered/Jacobi difference too, give its loop's extra delay in ``JACOBI_LOOP_DELAY``; to
-pack a subsystem into a container, add it to ``CONTAINER_SUBSYSTEMS``.
+Every catalog system runs in every engine (``ENGINE_SYSTEMS``, its first
+``ENGINE_RUN_SECONDS``). To check a system's ordered/Jacobi difference too, give its control
+loop's extra delay in ``JACOBI_LOOP_DELAY``; to pack one of its subsystems into a container,
+add the members to ``CONTAINER_SUBSYSTEMS``.
 """
 
 import os
@@ -56,9 +57,11 @@ MODELS = ROOT / "models"
 sys.path.insert(0, str(ROOT))
 import build_fmu as builder  # noqa: E402
 
-ENGINE_SYSTEMS = [name for name in ("plant_yang2020", "seed003_closed_loop", "seed000_whang")
-                  if name in SYSTEMS]
-"""Catalog systems run in every engine (the seed systems join when they land)."""
+ENGINE_SYSTEMS = sorted(SYSTEMS)
+"""Every catalog system (every models/*.ssp) runs in every engine."""
+
+ENGINE_RUN_SECONDS = 420.0
+"""Simulated time per engine run (a system's full length when shorter), to bound CI time."""
 
 JACOBI_LOOP_DELAY = {"plant_yang2020": 1}
 """Base steps of delay a Jacobi master adds around the system's control loop."""
@@ -140,17 +143,25 @@ def engine_runs(ssp_files):
 
     def get(system: str, engine: str):
         if (system, engine) not in cache:
-            cache[system, engine] = run_in_subprocess(engine, ssp_files[system],
+            stop = min(build_system(system).stop_time, ENGINE_RUN_SECONDS)
+            cache[system, engine] = run_in_subprocess(engine, ssp_files[system], stop,
                                                       osp=MODELS / system)
         return cache[system, engine]
     return get
 
 
 def _assert_identical(results, reference, columns=None, rows=slice(None), label=""):
-    """Bit-identical signals; time stamps equal to 1 ns (fmpy computes n·h, we n/(1/h))."""
+    """Bit-identical signals; time stamps equal to 1 ns (fmpy computes n·h, we n/(1/h)).
+
+    libcosim has no t = 0 value of a Boolean output of a component at the base step (see
+    ``engines.run_libcosim``): such a column may start with NaN, and only there."""
     assert np.allclose(results.time[rows], reference.time[rows], rtol=0, atol=1e-9), label
     for name in columns or reference.columns:
-        engine, ours = results[name][rows], reference[name][rows]
+        engine, ours = results[name][rows].copy(), reference[name][rows]
+        boolean = np.isin(ours, (0.0, 1.0)).all()
+        if label.startswith("libcosim") and rows == slice(None) and boolean \
+                and np.isnan(engine[0]):
+            engine[0] = ours[0]
         different = np.flatnonzero(engine != ours)
         assert different.size == 0, (
             f"{label} {name}: first difference at t = {reference.time[rows][different[0]]} s: "
@@ -197,7 +208,7 @@ def _loop_residual(system: SystemSpec, ordered) -> dict[str, float]:
     dt = system.base_step
     profile = make_profile(params["profile"], params.get("profile_offset", 0.0),
                            params.get("profile_table", ""))
-    grid = np.arange(round(system.stop_time / dt) + 1) * dt
+    grid = np.arange(round(ordered.time[-1] / dt) + 1) * dt
     reference = np.array([profile.reference(t) for t in grid])
     tracking = float(np.abs(ordered["plant.h"] - ordered["controller.h_ref"]).max())
     return {

@@ -251,7 +251,9 @@ def run_ecos(ssp: Path, system: SystemSpec, fmu_paths: dict[str, Path],
     slots = [(getters[s.type], f"{s.component}::{s.variable}") for s in recording.signals]
     try:
         names = _parameter_set_names(ssp)
-        simulation.init(parameter_set=SSP_PARAMETER_SET if SSP_PARAMETER_SET in names else None)
+        if not simulation.init(
+                parameter_set=SSP_PARAMETER_SET if SSP_PARAMETER_SET in names else None):
+            raise EngineError(f"ECOS cannot initialize {ssp}: {EcosLib.get_last_error()}")
 
         def sample() -> list[float]:
             return [float(get(identifier)) for get, identifier in slots]
