@@ -60,7 +60,7 @@ import build_fmu as builder  # noqa: E402
 ENGINE_SYSTEMS = sorted(SYSTEMS)
 """Every catalog system (every models/*.ssp) runs in every engine."""
 
-ENGINE_RUN_SECONDS = 420.0
+ENGINE_RUN_SECONDS = 120.0
 """Simulated time per engine run (a system's full length when shorter), to bound CI time."""
 
 JACOBI_LOOP_DELAY = {"plant_yang2020": 1}
