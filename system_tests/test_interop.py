@@ -44,10 +44,10 @@ from altfusion.interop.container import (  # noqa: E402
 from altfusion.interop.engines import (  # noqa: E402
     EngineError,
     ecos_divergent_components,
-    python_environment,
     run_in_subprocess,
 )
 from altfusion.interop.osp import OSP_FILE, write_osp  # noqa: E402
+from altfusion.interop.proxy import python_environment  # noqa: E402
 from altfusion.physics.profiles import make_profile  # noqa: E402
 from altfusion.systems import SYSTEMS, build_system  # noqa: E402
 from altfusion.systems.plant import plant_components, plant_connections  # noqa: E402
@@ -422,7 +422,7 @@ def test_ecos_command_line_host_runs_every_fmu_in_a_proxy_process(ssp_files, eng
 
 def test_without_preloaded_libpython_the_proxy_cannot_load_the_fmus(ssp_files, tmp_path):
     """The documented requirement is real: pythonfmu's library takes Python from its host."""
-    from altfusion.interop.engines import ecos_binaries, proxy_ssp
+    from altfusion.interop.proxy import ecos_binaries, proxy_ssp
 
     proxied = proxy_ssp(ssp_files["plant_yang2020"], tmp_path / "proxied.ssp")
     env = {k: v for k, v in os.environ.items() if k != "LD_PRELOAD"}
