@@ -1,5 +1,6 @@
 """Build every FMU in fmu_src/ into models/<Name>.fmu and every catalog system into
-models/<name>.ssp; validate them; regenerate the generated documentation.
+models/<name>.ssp and models/<name>/OspSystemStructure.xml (libcosim's format, with copies of
+its FMUs); validate them; regenerate the generated documentation.
 
     python build_fmu.py            build what is missing or older than its sources
     python build_fmu.py --force    rebuild everything
@@ -54,11 +55,11 @@ def stale(script: Path, fmu: Path) -> bool:
     return not fmu.exists() or fmu.stat().st_mtime < sources_mtime(script)
 
 
-def build_fmu(script: Path) -> Path:
+def build_fmu(script: Path, dest: Path = MODELS) -> Path:
     from pythonfmu.builder import FmuBuilder
 
     return FmuBuilder.build_FMU(
-        script, dest=MODELS, project_files=[CORE, *bundled_files(script)],
+        script, dest=dest, project_files=[CORE, *bundled_files(script)],
         canGetAndSetFMUstate=True, canSerializeFMUstate=True,
         canHandleVariableCommunicationStepSize=False,
     )
@@ -74,13 +75,15 @@ def build_systems(fmu_paths: dict[str, Path]) -> list[Path]:
     from fmpy.ssp.ssd import read_ssd
 
     from altfusion.cosim.ssp import write_ssp
+    from altfusion.interop.osp import write_osp
     from altfusion.systems import SYSTEMS
 
     written = []
     for name, make in SYSTEMS.items():
-        path = write_ssp(make(), fmu_paths, MODELS / f"{name}.ssp")
+        system = make()
+        path = write_ssp(system, fmu_paths, MODELS / f"{name}.ssp")
         read_ssd(str(path), validate=True)
-        written.append(path)
+        written += [path, write_osp(system, fmu_paths, MODELS / name)]
     return written
 
 
@@ -124,7 +127,7 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     fmu_paths = {fmu.stem: fmu for fmu in targets.values()}
     for path in build_systems(fmu_paths):
-        print(f"wrote models/{path.name}")
+        print(f"wrote {path.relative_to(HERE)}")
     build_docs(fmu_paths)
     print(f"{len(targets)} FMUs valid, systems written")
     return 0

@@ -33,8 +33,11 @@ class Component(ABC):
         step_size: float = DEFAULT_STEP_SIZE,
         start_time: float = 0.0,
         inputs: dict[str, Any] | None = None,
+        resources: str | None = None,
     ):
         self.params = params if params is not None else self.Params()
+        self.resources = resources
+        """Folder where relative file parameters are looked up (the FMU's resources)."""
         check_params(self.params)
         for name, value in (inputs or {}).items():
             setattr(self, name, value)

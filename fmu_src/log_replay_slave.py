@@ -26,6 +26,3 @@ class LogReplay(CoreSlave):
     bundled_files = ("tests/data/flightlogs",)
     variables = tuple(contract_output(name, depends_on=(), description=SOURCES.get(name))
                       for name in component.OUTPUT_NAMES)
-
-    def core_params(self):
-        return component.resolve_log_file(self._params, self.resources)

@@ -76,10 +76,12 @@ def test_an_empty_log_file_replays_nothing_and_says_so():
 
 
 def test_a_relative_log_file_is_resolved_in_the_resources_folder_when_it_is_there():
-    params = LogReplayParams(log_file="flightlogs/auterion_esc_status_log.ulg")
-    resolved = resolve_log_file(params, str(LOGS_DIR.parent))
-    assert Path(resolved.log_file) == LOGS_DIR / "auterion_esc_status_log.ulg"
-    assert resolve_log_file(params, "/nonexistent") == params
+    relative = "flightlogs/auterion_esc_status_log.ulg"
+    resolved = resolve_log_file(relative, str(LOGS_DIR.parent))
+    assert Path(resolved) == LOGS_DIR / "auterion_esc_status_log.ulg"
+    assert resolve_log_file(relative, "/nonexistent") == relative
+    replay = LogReplay(LogReplayParams(log_file=relative), resources=str(LOGS_DIR.parent))
+    assert replay.log.streams["baro"].time.size > 0
 
 
 @pytest.mark.parametrize("name", sorted(LOGS))

@@ -5,6 +5,7 @@ state), so the runner's orchestration is one piece of code and the direct backen
 reference result that the FMU run must reproduce.
 """
 
+import atexit
 import copy
 import importlib
 import itertools
@@ -157,24 +158,59 @@ def _router() -> _LogRouter:
     return _ROUTER
 
 
+_EXTRACTED: dict[Path, str] = {}
+
+
+_PYTHONFMU_LIBRARIES: dict[Path, Any] = {}
+"""The loaded pythonfmu libraries, whose Python state is released at exit (see below)."""
+
+
+def _release_pythonfmu_state() -> None:
+    """Release pythonfmu's static Python state while the process is still intact.
+
+    pythonfmu 0.7.0 keeps that state in a static ``std::shared_ptr``. At process exit the C++
+    static destructors release it and then the library's unload hook assigns it again: a
+    double release of freed memory, which now and then aborts the process ("corrupted
+    double-linked list"). The hook's function, ``finalizePythonInterpreter``, is exported:
+    calling it first, from a Python exit handler, releases the state once and leaves a null
+    pointer, which both later releases handle. (In a Python host the state holds no
+    interpreter: this only joins a finished thread.)
+    """
+    for library in _PYTHONFMU_LIBRARIES.values():
+        library.finalizePythonInterpreter()
+    _PYTHONFMU_LIBRARIES.clear()
+
+
+def _track_library(path: Path, fmu: FMU2Slave) -> None:
+    if path in _PYTHONFMU_LIBRARIES or not hasattr(fmu.dll, "finalizePythonInterpreter"):
+        return
+    if not _PYTHONFMU_LIBRARIES:
+        atexit.register(_release_pythonfmu_state)
+    _PYTHONFMU_LIBRARIES[path] = fmu.dll
+
+
+def _extracted_folder(path: Path) -> str:
+    """The FMU extracted once per process (its libraries stay loaded from there)."""
+    folder = _EXTRACTED.get(path)
+    if folder is None:
+        folder = _EXTRACTED[path] = extract(str(path))
+    return folder
+
+
 class FmuInstance:
     """One FMU instance driven through fmpy's FMU2Slave, with its log messages collected."""
-
-    _extracted: dict[Path, str] = {}
 
     def __init__(self, name: str, info: FmuInfo):
         check_core_version(info)
         self.name, self.info = name, info
-        folder = self._extracted.get(info.path)
-        if folder is None:
-            folder = extract(str(info.path))
-            self._extracted[info.path] = folder
+        folder = _extracted_folder(info.path)
         router = _router()
         self.instance_name, self.messages = router.register(name)
         self.warnings: list[str] = []
         self.fmu = FMU2Slave(guid=info.guid, unzipDirectory=folder,
                              modelIdentifier=info.model_name, instanceName=self.instance_name)
         self.fmu.instantiate(callbacks=router.callbacks, loggingOn=True)
+        _track_library(info.path, self.fmu)
 
     def errors(self) -> list[str]:
         """Messages logged at fmi2Error severity or worse since the last call; clears them.
@@ -293,12 +329,7 @@ class FmuInstance:
 
     def free(self) -> None:
         """Free the instance but keep the shared library loaded: unloading pythonfmu's library
-        tears down its embedded-Python state, and loading it again crashes the process.
-
-        pythonfmu keeps the strings of the last logged messages until its next call and would
-        release them without the GIL when the instance is freed (heap corruption at exit): an
-        empty getReal first makes it release them properly."""
-        self.fmu.getReal([])
+        tears down its embedded-Python state, and loading it again crashes the process."""
         self.fmu.fmi2FreeInstance(self.fmu.component)
         _router().queues.pop(self.instance_name, None)
 
@@ -313,6 +344,7 @@ class CoreInstance:
         self.core_class = getattr(importlib.import_module(module), qualname)
         self.name, self.info = name, info
         self._by_ref = {v.value_reference: v for v in info.variables.values()}
+        self.resources = str(Path(_extracted_folder(info.path)) / "resources")
         self.core = self.core_class()
         self.warnings: list[str] = []
 
@@ -334,7 +366,7 @@ class CoreInstance:
                   if v.causality == "input"}
         try:
             self.core = self.core_class(params, step_size=step_size, start_time=start_time,
-                                        inputs=inputs)
+                                        inputs=inputs, resources=self.resources)
         except Exception as error:
             raise CosimError(f"component '{self.name}': initialization failed: {error}") from None
 

@@ -14,6 +14,11 @@ from two kinds of connection, told apart by the FMU's ModelStructure output depe
 
 Thus a sensor samples the plant state of the same instant, an estimator fuses the sample of
 that instant, and the loop through the plant is broken where the physics breaks it.
+
+``master="jacobi"`` instead gives every input the value latched at the start of its
+component's step, as the fixed-step masters of libcosim and ECOS do (all components step in
+parallel, outputs are exchanged when a step ends). It is the reference those engines are
+checked against (``altfusion.interop``): a feedthrough signal then arrives one base step late.
 """
 
 import graphlib
@@ -35,7 +40,10 @@ from altfusion.cosim.system import SystemSpec
 from altfusion.errors import ParameterError
 from altfusion.timegrid import TickClock
 
-__all__ = ["CosimError", "Simulation", "simulate"]
+__all__ = ["MASTERS", "CosimError", "Simulation", "simulate"]
+
+MASTERS = ("ordered", "jacobi")
+"""Master algorithms: ordered stepping (the default) and Jacobi (every input latched)."""
 
 
 @dataclass
@@ -101,11 +109,15 @@ class _Stepped:
 class Simulation:
     """A system ready to run, repeatedly: instances are created once and reset between runs."""
 
-    def __init__(self, system: SystemSpec, fmu_paths: dict[str, Path], backend: str = "fmu"):
+    def __init__(self, system: SystemSpec, fmu_paths: dict[str, Path], backend: str = "fmu",
+                 master: str = "ordered"):
         if backend not in ("fmu", "core"):
             raise ValueError(f"backend must be 'fmu' or 'core', not {backend!r}")
+        if master not in MASTERS:
+            raise ValueError(f"master must be one of {MASTERS}, not {master!r}")
         self.system = system
         self.backend = backend
+        self.master = master
         self.base = TickClock(system.base_step, system.start_time, name="base_step")
         self._components: list[_Stepped] = []
         self._by_name: dict[str, _Stepped] = {}
@@ -122,6 +134,8 @@ class Simulation:
             self._recorded = self._resolve_recording()
             self._resolve_connections()
             self._order = self._step_order()
+            if master == "jacobi":
+                self._latch_every_input()
             for component in self._components:
                 component.prepare()
         except Exception:
@@ -193,6 +207,15 @@ class Simulation:
                 target.feedthrough.append(entry)
             else:
                 target.delayed.append(entry)
+
+    def _latch_every_input(self) -> None:
+        """Jacobi: feedthrough inputs too take the value latched at the start of the step.
+
+        Initialization keeps the upstream-first order: the engines iterate their connections
+        in Initialization Mode until the initial values settle, which gives the same values."""
+        for component in self._components:
+            component.delayed += component.feedthrough
+            component.feedthrough = []
 
     def _step_order(self) -> list[_Stepped]:
         graph = graphlib.TopologicalSorter()
@@ -304,7 +327,8 @@ class Simulation:
 
 
 def simulate(system: SystemSpec, fmu_paths: dict[str, Path], backend: str = "fmu",
-             stop_time: float | None = None, parameters: dict[str, Any] | None = None) -> Results:
+             stop_time: float | None = None, parameters: dict[str, Any] | None = None,
+             master: str = "ordered") -> Results:
     """Build, run once and close a :class:`Simulation`."""
-    with Simulation(system, fmu_paths, backend) as simulation:
+    with Simulation(system, fmu_paths, backend, master) as simulation:
         return simulation.run(stop_time, parameters)

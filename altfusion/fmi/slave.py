@@ -22,6 +22,10 @@ FMI behaviour that pythonfmu 0.7.0 leaves to us:
   execution, which balances the stray release.
 * The modelDescription gets UnitDefinitions, per-variable units and bounds, output dependencies,
   InitialUnknowns and a VendorAnnotation with the core version and core class.
+* In Initialization Mode, outputs follow the parameters and inputs set so far: a set marks the
+  core stale and the next get rebuilds it. Importers may set parameters after
+  ``enterInitializationMode`` (ECOS applies the SSP parameter set there) and then iterate their
+  connections (libcosim, ECOS) until the initial values settle.
 """
 
 import contextlib
@@ -99,6 +103,8 @@ class CoreSlave(Fmi2Slave):
         self._step_size = DEFAULT_STEP_SIZE
         self._start_time = 0.0
         self._failure: str | None = None
+        self._initializing = False
+        self._stale = False
         self.core = self.core_class()
         for info in self.parameter_infos():
             self._register(info.name, info.type, Fmi2Causality.parameter, Fmi2Variability.fixed,
@@ -137,13 +143,17 @@ class CoreSlave(Fmi2Slave):
             else:
                 self._params = replace(self._params, **{name: coerce(type(self._params), name,
                                                                      value)})
+            self._stale = self._initializing
         return set_value
 
     def _core_getter(self, name: str):
         return lambda: getattr(self.core, name)
 
     def _input_setter(self, var: Input):
-        return lambda value: setattr(self.core, var.name, var.type(value))
+        def set_value(value: Any) -> None:
+            setattr(self.core, var.name, var.type(value))
+            self._stale = self._initializing
+        return set_value
 
     # ----------------------------------------------------------------- logging
     def _log(self, status: Fmi2Status, message: str) -> None:
@@ -156,28 +166,31 @@ class CoreSlave(Fmi2Slave):
                                     f"{traceback.format_exc()}")
 
     # ----------------------------------------------------------------- life cycle
-    def core_params(self) -> Any:
-        """The parameters the core is built with: those set by the host. A slave may override
-        this to resolve host-specific values, e.g. a file path relative to ``self.resources``
-        (the FMU's resources folder)."""
-        return self._params
-
     def _rebuild_core(self) -> None:
         """Construct the core from the current parameters, keeping the inputs already set."""
         inputs = {v.name: getattr(self.core, v.name) for v in self.variables
                   if isinstance(v, Input)}
-        self.core = self.core_class(self.core_params(), step_size=self._step_size,
-                                    start_time=self._start_time, inputs=inputs)
+        self.core = self.core_class(self._params, step_size=self._step_size,
+                                    start_time=self._start_time, inputs=inputs,
+                                    resources=self.resources)
 
     def setup_experiment(self, start_time: float, stop_time=None, tolerance=None) -> None:
         self._start_time = float(start_time)
 
     def enter_initialization_mode(self) -> None:
         # Errors are reported when initialization ends, once every parameter is set.
-        with contextlib.suppress(Exception):
-            self._rebuild_core()
+        self._initializing = True
+        self._refresh_initial_outputs(force=True)
+
+    def _refresh_initial_outputs(self, force: bool = False) -> None:
+        """In Initialization Mode, rebuild the core if a parameter or input changed."""
+        if force or (self._initializing and self._stale):
+            self._stale = False
+            with contextlib.suppress(Exception):
+                self._rebuild_core()
 
     def exit_initialization_mode(self) -> None:
+        self._initializing = self._stale = False
         try:
             self._rebuild_core()
             self._failure = None
@@ -203,6 +216,8 @@ class CoreSlave(Fmi2Slave):
 
     # ----------------------------------------------------------------- value access
     def _guarded(self, method, label, vrs, *args):
+        if label.startswith("get"):
+            self._refresh_initial_outputs()
         try:
             return method(vrs, *args)
         except Exception:

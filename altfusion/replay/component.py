@@ -18,7 +18,7 @@ when the component is reset, so a host logs it as warnings with the first step.
 """
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -62,14 +62,14 @@ class LogReplayParams:
         "after the log's first sample) is delivered at tau - time_offset", min=0.0)
 
 
-def resolve_log_file(params: LogReplayParams, resources: str | None) -> LogReplayParams:
-    """``params`` with a relative ``log_file`` made absolute if it exists under ``resources``."""
-    path = Path(params.log_file)
-    if params.log_file and not path.is_absolute() and resources:
+def resolve_log_file(log_file: str, resources: str | None) -> str:
+    """``log_file``, made absolute if it is relative and exists under ``resources``."""
+    path = Path(log_file)
+    if log_file and not path.is_absolute() and resources:
         candidate = Path(resources) / path
         if candidate.is_file():
-            return replace(params, log_file=str(candidate))
-    return params
+            return str(candidate)
+    return log_file
 
 
 def delivery_ticks(time_s: np.ndarray, clock: TickClock, time_offset: float) -> np.ndarray:
@@ -112,7 +112,7 @@ class LogReplay(Component):
 
     def configure(self, clock: TickClock) -> None:
         """Read the log and schedule each sample on the step grid."""
-        self.log = self._read(self.params.log_file)
+        self.log = self._read(resolve_log_file(self.params.log_file, self.resources))
         self._streams: dict[str, SampleStream] = {}
         self._ticks: dict[str, np.ndarray] = {}
         self.skipped: dict[str, int] = {}

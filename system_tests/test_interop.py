@@ -1,0 +1,453 @@
+"""Our FMUs and SSP systems in third-party engines: libcosim, ECOS, an FMU container.
+
+Every third-party run happens in a fresh Python process (engines unload FMU libraries, which
+pythonfmu does not survive twice in one process). The reference for the engines is our runner
+with ``master="jacobi"``: libcosim and ECOS are Jacobi masters, and running the same FMU code
+on the same inputs they must agree with it bit for bit. Our default ordered stepping differs
+from Jacobi by derived amounts, asserted below.
+
+Every catalog system runs in every engine (``ENGINE_SYSTEMS``, its first
+``ENGINE_RUN_SECONDS``). To check a system's ordered/Jacobi difference too, give its control
+loop's extra delay in ``JACOBI_LOOP_DELAY``; to pack one of its subsystems into a container,
+add the members to ``CONTAINER_SUBSYSTEMS``.
+"""
+
+import os
+import subprocess
+import sys
+import zipfile
+from dataclasses import replace
+from pathlib import Path
+
+import control
+import numpy as np
+import pytest
+
+pytest.importorskip("libcosimpy", reason="the interop extra is not installed")
+pytest.importorskip("ecospy", reason="the interop extra is not installed")
+pytest.importorskip("fmu_manipulation_toolbox", reason="the interop extra is not installed")
+
+from altfusion.constants import G0, R_AIR  # noqa: E402
+from altfusion.cosim import (  # noqa: E402
+    ComponentSpec,
+    Connection,
+    SystemSpec,
+    simulate,
+    write_ssp,
+)
+from altfusion.interop.compliance import fmu_problems, ssp_problems  # noqa: E402
+from altfusion.interop.container import (  # noqa: E402
+    build_container,
+    input_table,
+    simulate_in_subprocess,
+)
+from altfusion.interop.engines import (  # noqa: E402
+    EngineError,
+    ecos_divergent_components,
+    run_in_subprocess,
+)
+from altfusion.interop.osp import OSP_FILE, write_osp  # noqa: E402
+from altfusion.interop.proxy import python_environment  # noqa: E402
+from altfusion.physics.profiles import make_profile  # noqa: E402
+from altfusion.systems import SYSTEMS, build_system  # noqa: E402
+from altfusion.systems.plant import plant_components, plant_connections  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+MODELS = ROOT / "models"
+sys.path.insert(0, str(ROOT))
+import build_fmu as builder  # noqa: E402
+
+ENGINE_SYSTEMS = sorted(SYSTEMS)
+"""Every catalog system (every models/*.ssp) runs in every engine."""
+
+ENGINE_RUN_SECONDS = 120.0
+"""Simulated time per engine run (a system's full length when shorter), to bound CI time."""
+
+JACOBI_LOOP_DELAY = {"plant_yang2020": 1}
+"""Base steps of delay a Jacobi master adds around the system's control loop."""
+
+CONTAINER_SUBSYSTEMS = {"plant_yang2020": [("atmosphere", "controller")]}
+"""Subsystems packed into one container FMU and checked against the multi-FMU run."""
+
+SINGLE_RATE_SYSTEMS = [name for name in ENGINE_SYSTEMS
+                       if len({c.step_size for c in build_system(name).components}) == 1]
+"""Catalog systems whose components share one step: each fits in one container FMU."""
+
+# ------------------------------------------------------------------------------ compliance
+
+
+def test_every_fmu_passes_fmpy_and_the_toolbox_fmi2_checker(fmus):
+    assert fmus
+    for path in fmus.values():
+        assert fmu_problems(path) == [], path.name
+
+
+def test_the_fmu_checker_reports_a_broken_model_description(fmus, tmp_path):
+    """A continuous parameter is forbidden by FMI 2.0 (§2.2.7): both checkers must say so."""
+    broken = tmp_path / "Broken.fmu"
+    with zipfile.ZipFile(fmus["VerticalDynamics"]) as source, \
+            zipfile.ZipFile(broken, "w") as target:
+        for item in source.infolist():
+            data = source.read(item.filename)
+            if item.filename == "modelDescription.xml":
+                data = data.replace(b'causality="parameter" variability="fixed"',
+                                    b'causality="parameter" variability="continuous"', 1)
+            target.writestr(item, data)
+    problems = fmu_problems(broken)
+    assert any(p.startswith("fmu-manipulation-toolbox") for p in problems), problems
+
+
+def test_every_ssp_passes_the_ssp_and_osp_checks(ssp_files):
+    assert set(ssp_files) == set(SYSTEMS)
+    for path in ssp_files.values():
+        assert ssp_problems(path) == [], path.name
+
+
+def _edited_ssp(path: Path, target: Path, old: bytes, new: bytes) -> Path:
+    with zipfile.ZipFile(path) as source, zipfile.ZipFile(target, "w") as copy:
+        for item in source.infolist():
+            data = source.read(item.filename)
+            if item.filename == "SystemStructure.ssd":
+                assert old in data
+                data = data.replace(old, new)
+            copy.writestr(item, data)
+    return target
+
+
+@pytest.mark.parametrize(("old", "new", "problem"), [
+    (b'baseStepSize="0.01"', b'', "no positive osp:FixedStepAlgorithm baseStepSize"),
+    (b'<osp:StepSizeHint value="0.01" />', b'<osp:StepSizeHint value="0.015" />',
+     "is not a multiple of the base step"),
+    (b'<ssv:Real value="1.5" />', b'<ssv:Real value="heavy" />', "ParameterSet parameters"),
+    (b'<ssv:Parameter name="mass">', b'<ssv:Parameter name="weight">', "no parameter weight"),
+    (b'source="resources/Atmosphere.fmu"', b'source="resources/Air.fmu"', "not in the archive"),
+])
+def test_the_ssp_checks_report_what_breaks_an_engine(ssp_files, tmp_path, old, new, problem):
+    broken = _edited_ssp(ssp_files["plant_yang2020"], tmp_path / "broken.ssp", old, new)
+    assert any(problem in p for p in ssp_problems(broken)), ssp_problems(broken)
+
+
+def test_an_osp_folder_is_exported_next_to_every_ssp(ssp_files):
+    for name in ssp_files:
+        folder = MODELS / name
+        assert (folder / OSP_FILE).is_file(), name
+        for component in build_system(name).components:
+            assert (folder / f"{component.fmu}.fmu").is_file()
+
+
+# ------------------------------------------------------------------------------ engines
+
+
+@pytest.fixture(scope="module")
+def engine_runs(ssp_files):
+    """Every engine's run of every system in ENGINE_SYSTEMS, by (system, engine)."""
+    cache: dict[tuple[str, str], object] = {}
+
+    def get(system: str, engine: str):
+        if (system, engine) not in cache:
+            stop = min(build_system(system).stop_time, ENGINE_RUN_SECONDS)
+            cache[system, engine] = run_in_subprocess(engine, ssp_files[system], stop,
+                                                      osp=MODELS / system)
+        return cache[system, engine]
+    return get
+
+
+def _assert_identical(results, reference, columns=None, rows=slice(None), label=""):
+    """Bit-identical signals; time stamps equal to 1 ns (fmpy computes n·h, we n/(1/h)).
+
+    libcosim has no t = 0 value of a Boolean output of a component at the base step (see
+    ``engines.run_libcosim``): such a column may start with NaN, and only there."""
+    assert np.allclose(results.time[rows], reference.time[rows], rtol=0, atol=1e-9), label
+    for name in columns or reference.columns:
+        engine, ours = results[name][rows].copy(), reference[name][rows]
+        boolean = np.isin(ours, (0.0, 1.0)).all()
+        if label.startswith("libcosim") and rows == slice(None) and boolean \
+                and np.isnan(engine[0]):
+            engine[0] = ours[0]
+        different = np.flatnonzero(engine != ours)
+        assert different.size == 0, (
+            f"{label} {name}: first difference at t = {reference.time[rows][different[0]]} s: "
+            f"{engine[different[0]]!r} != {ours[different[0]]!r}")
+
+
+@pytest.mark.parametrize("system", ENGINE_SYSTEMS)
+@pytest.mark.parametrize("engine", ["libcosim", "libcosim-osp"])
+def test_libcosim_reproduces_the_jacobi_reference_bit_for_bit(engine_runs, system, engine):
+    """libcosim's fixed-step algorithm (SSP or exported OSP folder) steps every component at
+    its own rate with every input latched at the start of the component's step, and observes
+    outputs when a step completes: exactly ``master="jacobi"``."""
+    _assert_identical(engine_runs(system, engine), engine_runs(system, "altfusion-jacobi"),
+                      label=engine)
+
+
+@pytest.mark.parametrize("system", ENGINE_SYSTEMS)
+def test_ecos_reproduces_the_jacobi_reference_bit_for_bit(engine_runs, system):
+    """ECOS agrees exactly except downstream of a slower-to-faster connection (none in a
+    single-rate system), at multiples of each component's step."""
+    spec = build_system(system)
+    ecos, reference = engine_runs(system, "ecos"), engine_runs(system, "altfusion-jacobi")
+    divergent = ecos_divergent_components(spec)
+    for name in reference.columns:
+        component = spec.component(name.partition(".")[0])
+        if component.name in divergent:
+            continue
+        every = round(component.step_size / (spec.output_interval or spec.base_step))
+        _assert_identical(ecos, reference, [name], slice(0, None, max(every, 1)), "ecos")
+
+
+def _counters(system: str) -> list[str]:
+    return [s for s in build_system(system).record if s.endswith(("_count", "_time"))]
+
+
+@pytest.mark.parametrize("system", [s for s in ENGINE_SYSTEMS if _counters(s)])
+def test_multi_rate_counters_come_out_exactly_as_in_our_runner(engine_runs, system):
+    """Sample counts and time stamps depend on time only: libcosim running the exported OSP
+    folder (each component at its own stepSize) gives exactly our ordered runner's."""
+    _assert_identical(engine_runs(system, "libcosim-osp"), engine_runs(system, "altfusion"),
+                      _counters(system), label="libcosim-osp")
+
+
+def _loop_residual(system: SystemSpec, ordered) -> dict[str, float]:
+    """Terms of the ordered/Jacobi difference of a loop closed on the true altitude."""
+    controller = system.component("controller")
+    params = controller.parameters
+    kp, kd, ki = (params.get(k, d) for k, d in (("kp", 5.25), ("kd", 3.0), ("ki", 3.25)))
+    # Peak altitude response of the closed loop (e''' + kd e'' + kp e' + ki e = 0 for the
+    # error's integral) to a unit velocity kick: G (s).
+    loop = control.ss([[0, 1, 0], [0, 0, 1], [-ki, -kp, -kd]], np.zeros((3, 1)),
+                      [[0, 1, 0]], 0)
+    times = np.linspace(0.0, 30.0, 30001)
+    gain = float(np.abs(np.squeeze(control.initial_response(loop, times, [0, 0, 1]).outputs))
+                 .max())
+    dt = system.base_step
+    profile = make_profile(params["profile"], params.get("profile_offset", 0.0),
+                           params.get("profile_table", ""))
+    grid = np.arange(round(ordered.time[-1] / dt) + 1) * dt
+    reference = np.array([profile.reference(t) for t in grid])
+    tracking = float(np.abs(ordered["plant.h"] - ordered["controller.h_ref"]).max())
+    return {
+        "vz": float(np.abs(reference[:, 1]).max()),
+        "az": float(np.abs(reference[:, 2]).max()),
+        "kick": gain * float(np.abs(np.diff(reference[:, 2])).max()) * dt,
+        "tracking": tracking,
+    }
+
+
+@pytest.mark.parametrize("system", [s for s in ENGINE_SYSTEMS if s in JACOBI_LOOP_DELAY])
+def test_ordered_and_jacobi_masters_differ_by_the_derived_loop_delay(engine_runs, system):
+    """A Jacobi master hands the controller the altitude of the previous step: the loop gains
+    a delay of L·dt (L = 1 base step for plant_yang2020), and its integral action makes the
+    vehicle track the reference L·dt ahead. Writing Δh = h_J − h_O as
+    [h_J(t) − h_ref(t+L·dt)] + [h_ref(t+L·dt) − h_ref(t)] − [h_O(t) − h_ref(t)]:
+
+    * the middle term is at most max|vz_ref|·L·dt + ½·max|az_ref|·(L·dt)²
+      (12 m/s · 0.01 s = 0.12 m for seed 003's profile);
+    * the last is the ordered loop's own tracking error e_O (measured: ~1.2e-4 m);
+    * the first is the Jacobi loop's tracking error: e_O again, plus the loop's response to
+      its feedforward arriving L steps late: each step Δa of the reference acceleration
+      kicks the velocity by Δa·L·dt, which the closed loop (poles −1, −1 ± 1.5j) turns into
+      at most G·Δa·L·dt of altitude, G = 0.204 s (0.2 m/s² steps: 4.1e-4 m).
+
+    The atmosphere samples the altitude of the previous step too, which cancels the lead:
+    its altitude differs by at most 2·e_O + G·Δa·L·dt, times |dp/dh| = ρg ≤ 12.1 Pa/m."""
+    spec, delay = build_system(system), JACOBI_LOOP_DELAY[system]
+    ordered, jacobi = engine_runs(system, "altfusion"), engine_runs(system, "libcosim")
+    terms = _loop_residual(spec, ordered)
+    lag = delay * spec.base_step
+    residual = 2 * terms["tracking"] + terms["kick"] * delay
+    h_bound = terms["vz"] * lag + 0.5 * terms["az"] * lag**2 + residual
+    h_diff = np.abs(jacobi["plant.h"] - ordered["plant.h"]).max()
+    assert h_diff <= h_bound
+    assert h_diff >= terms["vz"] * lag - residual, "the one-step lead must be there"
+    density = ordered["atmosphere.p_static"] / (R_AIR * ordered["atmosphere.T_air"])
+    p_bound = (density * G0).max() * residual
+    assert np.abs(jacobi["atmosphere.p_static"] - ordered["atmosphere.p_static"]).max() \
+        <= p_bound
+
+
+# ------------------------------------------------------------------------------ multi-rate
+
+
+@pytest.fixture(scope="module")
+def sample_hold_fmu(tmp_path_factory, fmus):
+    """The test-fixture sensor FMU (fixtures/sample_hold_slave.py), built from this core."""
+    folder = tmp_path_factory.mktemp("fixture_fmus")
+    script = ROOT / "system_tests" / "fixtures" / "sample_hold_slave.py"
+    return Path(builder.build_fmu(script, folder))
+
+
+def multi_rate_system() -> SystemSpec:
+    """The plant loop at 0.01 s, a 5 Hz baro and a 1 Hz GPS (sample-and-hold sensors stepped
+    at their sample period) and the BaselineKF at 0.2 s fusing them by their counts."""
+    return SystemSpec(
+        name="multi_rate", description="plant at 0.01 s, sensors at 0.2 s and 1 s, KF at 0.2 s",
+        components=(*plant_components("yang2020"),
+                    ComponentSpec("baro", "SampleHold", 0.2, {"sample_period": 0.2}),
+                    ComponentSpec("gps", "SampleHold", 1.0, {"sample_period": 1.0}),
+                    ComponentSpec("kf", "BaselineKF", 0.2, {"R_gps": 25.0})),
+        connections=(*plant_connections(),
+                     Connection("plant.h", "baro.u"), Connection("plant.h", "gps.u"),
+                     Connection("baro.y", "kf.baro_h"), Connection("baro.y_count", "kf.baro_count"),
+                     Connection("gps.y", "kf.gps_h"), Connection("gps.y_count", "kf.gps_count")),
+        stop_time=60.0, output_interval=0.2,
+        record=("plant.h", "controller.h_ref", "baro.y", "baro.y_count", "baro.y_time", "gps.y",
+                "gps.y_count", "gps.y_time", "kf.h_est", "kf.h_std"),
+    )
+
+
+@pytest.fixture(scope="module")
+def multi_rate(tmp_path_factory, fmus, sample_hold_fmu):
+    folder = tmp_path_factory.mktemp("multi_rate")
+    system = multi_rate_system()
+    paths = {**fmus, "SampleHold": sample_hold_fmu}
+    ssp = write_ssp(system, paths, folder / "multi_rate.ssp")
+    assert ssp_problems(ssp) == []
+    write_osp(system, paths, folder / "osp")
+    runs = {"ordered": simulate(system, paths), "jacobi": simulate(system, paths, master="jacobi")}
+    for engine in ("libcosim-osp", "libcosim", "ecos"):
+        runs[engine] = run_in_subprocess(engine, ssp, osp=folder / "osp")
+    return system, runs
+
+
+def test_libcosim_runs_the_osp_export_with_each_sensor_at_its_own_rate(multi_rate):
+    """The sensors refuse any doStep other than their own step (0.2 s, 1 s), so a complete run
+    shows the rates were honoured; counters and time stamps equal our runner's exactly (they
+    depend on time only), and every signal equals the Jacobi reference bit for bit."""
+    _, runs = multi_rate
+    osp, ordered = runs["libcosim-osp"], runs["ordered"]
+    for counter in ("baro.y_count", "baro.y_time", "gps.y_count", "gps.y_time"):
+        _assert_identical(osp, ordered, [counter], label="libcosim-osp")
+    assert osp["baro.y_count"][-1] == 60.0 / 0.2 + 1 and osp["gps.y_count"][-1] == 60 + 1
+    _assert_identical(osp, runs["jacobi"], label="libcosim-osp")
+    _assert_identical(runs["libcosim"], runs["jacobi"], label="libcosim")
+
+
+def test_a_jacobi_sensor_samples_the_plant_one_sensor_step_late(multi_rate):
+    """A sensor stepping over (t - T, t] latches its input at t - T: in a Jacobi master it
+    samples the altitude of its previous step, T = 0.2 s for the baro, less the loop's
+    one-base-step lead. So |y_J − y_O| ≤ max|vz|·(T − dt) + 2 mm (the loop residual of the
+    closed-loop test, 6.5e-4 m, rounded up), while the counters agree exactly."""
+    system, runs = multi_rate
+    ordered, jacobi = runs["ordered"], runs["jacobi"]
+    vz_max = 0.2 * 60.0  # seed 003's profile accelerates at 0.2 m/s² for the first 60 s
+    for sensor, period in (("baro", 0.2), ("gps", 1.0)):
+        diff = np.abs(jacobi[f"{sensor}.y"] - ordered[f"{sensor}.y"]).max()
+        assert diff <= vz_max * (period - system.base_step) + 2e-3, sensor
+        assert np.array_equal(jacobi[f"{sensor}.y_count"], ordered[f"{sensor}.y_count"])
+
+
+def test_ecos_honours_the_step_sizes_but_feeds_faster_consumers_early(multi_rate):
+    """ECOS steps each component at its own rate (the run completes) and agrees bit for bit
+    with the Jacobi reference for the plant loop and the sensors at multiples of their steps.
+    It shows a slow component's output as soon as the component has stepped: at t = 0.2 s the
+    1 s GPS already reports its sample of t = 1 s (count 2), where libcosim and we still hold
+    the t = 0 sample; so the 0.2 s filter fed by the GPS differs."""
+    system, runs = multi_rate
+    ecos, jacobi = runs["ecos"], runs["jacobi"]
+    assert ecos_divergent_components(system) == {"kf"}
+    _assert_identical(ecos, jacobi, ["plant.h", "baro.y", "baro.y_count"], label="ecos")
+    _assert_identical(ecos, jacobi, ["gps.y", "gps.y_count", "gps.y_time"], slice(0, None, 5),
+                      "ecos")
+    row = 1  # t = 0.2 s
+    assert (ecos["gps.y_count"][row], jacobi["gps.y_count"][row]) == (2.0, 1.0)
+    assert not np.array_equal(ecos["kf.h_est"], jacobi["kf.h_est"])
+
+
+# ------------------------------------------------------------------------------ container
+
+
+@pytest.mark.parametrize("system", SINGLE_RATE_SYSTEMS)
+def test_the_whole_system_as_one_container_fmu_matches_the_multi_fmu_run(fmus, tmp_path,
+                                                                         system):
+    """The container steps its members in our upstream-first order (sequential mode), so
+    fmpy's simulate_fmu on it reproduces our ordered run bit for bit from the first step on.
+    At t = 0 the toolbox initializes a member fed through a loop (the plant's thrust) without
+    the value the loop gives it ("Loop of links ... initialized without the values its inputs
+    get from the loop"): the plant's initial acceleration reads 0 (thrust 0, resting on the
+    ground) where ours reads the commanded 0.2 m/s²; nothing else differs."""
+    spec = build_system(system)
+    container = build_container(spec, [c.name for c in spec.components], fmus,
+                                tmp_path / "Whole.fmu")
+    assert fmu_problems(container.path) == []
+    packed = simulate_in_subprocess(container, spec.stop_time)
+    ours = simulate(replace(spec, output_interval=container.step_size), fmus)
+    _assert_identical(packed, ours, list(container.outputs), slice(1, None), "container")
+    rank = {name: i for i, name in enumerate(container.members)}
+    loop_fed = {c.end.partition(".")[0] for c in spec.connections
+                if rank[c.start.partition(".")[0]] > rank[c.end.partition(".")[0]]}
+    at_start = [n for n in container.outputs if packed[n][0] != ours[n][0]]
+    assert {n.partition(".")[0] for n in at_start} <= loop_fed, at_start
+    if system == "plant_yang2020":
+        assert at_start == ["plant.az"]
+
+
+@pytest.mark.parametrize(("system", "members"),
+                         [(s, m) for s, subs in CONTAINER_SUBSYSTEMS.items() for m in subs])
+def test_a_subsystem_container_driven_by_the_rest_of_the_system_matches(fmus, tmp_path,
+                                                                        system, members):
+    """The container's inputs replay the multi-FMU run's signals, one row early for inputs our
+    runner reads at the end of the step (fmpy applies inputs before each doStep); its
+    outputs then equal the multi-FMU run bit for bit from the first step on. fmpy also
+    applies that first row during initialization, so at t = 0 the outputs of members fed
+    through a feedthrough input (the controller's thrust, the atmosphere's pressure and
+    temperature) see the altitude of t = 0.01 s."""
+    spec = build_system(system)
+    container = build_container(spec, list(members), fmus, tmp_path / "Subsystem.fmu")
+    ours = simulate(replace(spec, output_interval=container.step_size,
+                            record=tuple({*container.inputs.values(), *container.outputs})),
+                    fmus)
+    packed = simulate_in_subprocess(container, spec.stop_time,
+                                    input_table(container, ours, spec.stop_time))
+    _assert_identical(packed, ours, list(container.outputs), slice(1, None), "container")
+    fed = {i.partition(".")[0] for i in container.feedthrough_inputs}
+    at_start = {n for n in container.outputs if packed[n][0] != ours[n][0]}
+    assert at_start <= {n for n in container.outputs if n.partition(".")[0] in fed}, at_start
+
+
+# ------------------------------------------------------------------------------ non-Python host
+
+
+def test_ecos_command_line_host_runs_every_fmu_in_a_proxy_process(ssp_files, engine_runs):
+    """``ecos simulate`` (C++, no Python inside) with each FMU in its own ``proxyfmu`` process,
+    libpython preloaded: it agrees with ECOS in process to the 6 decimals of its CSV
+    (|Δ| ≤ 0.5e-6 + one float spacing at 1e5 Pa)."""
+    system = "plant_yang2020"
+    proxy = run_in_subprocess("ecos-proxy", ssp_files[system], stop_time=60.0)
+    in_process = engine_runs(system, "ecos")
+    rows = len(proxy.time)
+    assert rows == 601 and np.array_equal(proxy.time, in_process.time[:rows])
+    for name in in_process.columns:
+        assert np.abs(proxy[name] - in_process[name][:rows]).max() <= 0.5e-6 + 2e-11, name
+
+
+def test_without_preloaded_libpython_the_proxy_cannot_load_the_fmus(ssp_files, tmp_path):
+    """The documented requirement is real: pythonfmu's library takes Python from its host."""
+    from altfusion.interop.proxy import ecos_binaries, proxy_ssp
+
+    proxied = proxy_ssp(ssp_files["plant_yang2020"], tmp_path / "proxied.ssp")
+    env = {k: v for k, v in os.environ.items() if k != "LD_PRELOAD"}
+    completed = subprocess.run(
+        [str(ecos_binaries() / "ecos"), "simulate", "--path", str(proxied), "--stepSize", "0.01",
+         "--stopTime", "0.1", "--noCsv"], cwd=tmp_path, env=env, capture_output=True, text=True,
+        timeout=120)
+    assert completed.returncode != 0
+    assert "Unable to bind" in completed.stdout + completed.stderr
+    assert python_environment()["LD_PRELOAD"].endswith(".so.1.0")
+
+
+def test_a_failing_engine_run_is_a_clear_error(tmp_path):
+    with pytest.raises(EngineError, match="libcosim run of .* failed"):
+        run_in_subprocess("libcosim", tmp_path / "missing.ssp")
+
+
+@pytest.mark.parametrize(("engine", "message"), [
+    ("libcosim", "plant: Step not complete"),
+    ("ecos", r"'plant'.*'mass' = -1\.0: must be > 0"),
+])
+def test_a_bad_parameter_fails_the_engine_run_naming_it(fmus, tmp_path, engine, message):
+    """libcosim stops on the FMU's fmi2Discard; ECOS 0.7.2 ignores it, so the ECOS adapters
+    check the parameters on the core objects first."""
+    system = build_system("plant_yang2020").with_parameters({"plant.mass": -1.0})
+    ssp = write_ssp(system, fmus, tmp_path / "bad.ssp")
+    with pytest.raises(EngineError, match=message):
+        run_in_subprocess(engine, ssp, stop_time=1.0)
