@@ -164,7 +164,8 @@ class GnssReceiver(SampledSensor):
         return p.user_range_error * vdop * math.sqrt(max(1.0, p.nsat_reference / max(nsat, 1)))
 
     def geometry(self, t: float) -> tuple[int, float]:
-        """(satellites used, VDOP) at the sampling instant t."""
+        """(satellites used, VDOP) at the sampling instant t; in random mode this advances the
+        satellite-count walk to t (called once per sample)."""
         p = self.params
         if p.dop_mode == "constant":
             return p.nsat, p.vdop
