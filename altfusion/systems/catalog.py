@@ -5,6 +5,7 @@ from collections.abc import Callable
 from altfusion.cosim.system import Metric, SystemSpec
 from altfusion.systems.plant import plant_components, plant_connections
 from altfusion.systems.replay import LOGS, catalog_replay
+from altfusion.systems.sensors import SEED_003_SENSORS, sensor_components, sensor_connections
 
 
 def plant_yang2020() -> SystemSpec:
@@ -23,9 +24,35 @@ def plant_yang2020() -> SystemSpec:
     )
 
 
+def sensors_yang2020() -> SystemSpec:
+    """Seed 003's profile flown on the true altitude and sensed by all five sensors with
+    seed 003 Section 4.2's error levels; the metrics are each sensor's error."""
+    return SystemSpec(
+        name="sensors_yang2020",
+        description="Plant flying seed 003's climb/cruise/descend profile, sensed by "
+                    "AirDataModule, GnssReceiver, Accelerometer, RadioAltimeter and "
+                    "LaserRangefinder with seed 003 Section 4.2's noise levels",
+        components=plant_components("yang2020") + sensor_components(
+            parameters=SEED_003_SENSORS),
+        connections=plant_connections() + sensor_connections(),
+        stop_time=420.0,
+        output_interval=0.1,
+        record=("plant.h", "plant.vz", "plant.az", "air_data.baro_h", "gnss.gps_h",
+                "radar.radar_h", "laser.laser_h", "gnss.gps_vz", "accelerometer.acc_z",
+                "air_data.baro_count", "gnss.gps_count", "radar.radar_count",
+                "laser.laser_valid"),
+        metrics=(Metric("baro_h error", "air_data.baro_h", "plant.h"),
+                 Metric("gps_h error", "gnss.gps_h", "plant.h"),
+                 Metric("radar_h error (flat terrain at 0 m)", "radar.radar_h", "plant.h"),
+                 Metric("gps_vz error", "gnss.gps_vz", "plant.vz"),
+                 Metric("acc_z error", "accelerometer.acc_z", "plant.az")),
+    )
+
+
 SYSTEMS: dict[str, Callable[[], SystemSpec]] = {
     "plant_yang2020": plant_yang2020,
     **{name: (lambda name=name: catalog_replay(name)) for name in LOGS},
+    "sensors_yang2020": sensors_yang2020,
 }
 
 DEFAULT_SYSTEM = "plant_yang2020"

@@ -1,0 +1,156 @@
+"""The sampling mechanism shared by every sensor: schedule, latency, counter, time stamp.
+
+The multi-rate convention of ``../shared/spec/signals.md`` (FMI 2.0 has no clocks):
+
+* samples are taken at t = sample_offset + k·sample_period (k = 0, 1, ...) strictly after the
+  start time, computed in integer ticks of the component's step, so over 3600 s from t = 0 a
+  0.2 s period gives exactly 18000 samples whatever the communication step (as long as the
+  period, the offset and the latency are whole multiples of it);
+* a sample is delivered exactly ``latency`` after it was taken: its values, its time stamp
+  ``<prefix>_time`` (the sampling instant, exact) and the increment of ``<prefix>_count``
+  appear together;
+* between deliveries every output holds. Before the first delivery the count is 0, the time
+  stamp is the start time and the measurement outputs hold each sensor's documented initial
+  value (never NaN); consumers ignore count 0;
+* a sample may carry no new measurement (``Sample.new`` false: a GNSS outage, a radio
+  altimeter beyond its range); then only the values it carries change (validity flags) and
+  the count and time stamp hold.
+
+Randomness: each sensor draws from its own ``numpy`` ``SeedSequence`` built from its ``seed``
+parameter and its prefix (so two different sensors with equal seeds are still independent),
+spawned into one ``Generator`` per error source: enabling one error source never changes
+another's realization, and the same seed gives identical outputs.
+"""
+
+import math
+import zlib
+from abc import abstractmethod
+from collections import deque
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+
+from altfusion.component import Component
+from altfusion.errors import ParameterError
+from altfusion.params import param
+from altfusion.timegrid import TickClock, exact
+
+
+@dataclass(frozen=True)
+class SamplingParams:
+    """Parameters common to every sensor; each sensor's Params extends this dataclass."""
+
+    seed: int = param(0, None, "Seed of this component's random streams", min=0)
+    sample_period: float = param(0.01, "s", "Time between samples", positive=True)
+    sample_offset: float = param(
+        0.0, "s", "Samples are taken at t = sample_offset + k*sample_period, after the start",
+        min=0.0,
+    )
+    latency: float = param(
+        0.0, "s", "Delay between taking a sample and delivering it (a multiple of step_size)",
+        min=0.0,
+    )
+
+
+@dataclass(frozen=True)
+class Sample:
+    """What a sensor measured at one sampling instant.
+
+    ``values`` maps output attribute names to the values to deliver; ``new`` tells whether the
+    sample is a new measurement (the count increments and the time stamp moves) or only a
+    change of status (e.g. ``gps_fix`` false), with every other output holding.
+    """
+
+    values: dict[str, Any]
+    new: bool = True
+
+
+def first_sample_tick(clock: TickClock, offset: float, period_ticks: int) -> int:
+    """The first tick n >= 1 at which start + n·step = offset + k·period for some k >= 0."""
+    start = exact(clock.time(0))
+    relative = (exact(offset) - start) / exact(clock.step_size)
+    if relative.denominator != 1:
+        raise ParameterError(
+            "sample_offset", offset,
+            f"minus the start time {clock.time(0)!r} s must be a multiple of the step size "
+            f"{clock.step_size!r} s",
+        )
+    tick = int(relative)
+    if tick < 1:
+        tick += math.ceil((1 - tick) / period_ticks) * period_ticks
+    return tick
+
+
+def require_finite(name: str, value: float) -> float:
+    """``value`` as a float, or a ValueError naming the input if it is NaN or infinite."""
+    value = float(value)
+    if not math.isfinite(value):
+        raise ValueError(f"input {name} = {value!r} is not finite")
+    return value
+
+
+class SampledSensor(Component):
+    """Base of every sensor: the sampling schedule, the latency queue, count and time stamp.
+
+    A subclass sets ``Params`` (extending :class:`SamplingParams`), ``prefix`` (the signal
+    prefix, e.g. ``"baro"``) and ``streams`` (one name per independent error source), and
+    implements :meth:`reset_sensor` (initial outputs and error states) and :meth:`measure`
+    (one sample at the current time, from the current inputs). It may extend
+    :meth:`configure_sensor` to check its own parameters.
+    """
+
+    prefix: ClassVar[str]
+    streams: ClassVar[tuple[str, ...]] = ()
+
+    # ----------------------------------------------------------------- hooks
+    def configure_sensor(self, clock: TickClock) -> None:
+        """Check the sensor's own parameters against the step; default: nothing to check."""
+        return None
+
+    @abstractmethod
+    def reset_sensor(self) -> None:
+        """Set the initial measurement outputs and error states (``self.rng`` is ready)."""
+
+    @abstractmethod
+    def measure(self) -> Sample:
+        """Take one sample now (``self.time`` is the sampling instant)."""
+
+    # ----------------------------------------------------------------- Component
+    def configure(self, clock: TickClock) -> None:
+        p = self.params
+        self._period_ticks = clock.ticks_in(p.sample_period, "sample_period", allow_zero=False)
+        self._latency_ticks = clock.ticks_in(p.latency, "latency")
+        self._first_tick = first_sample_tick(clock, p.sample_offset, self._period_ticks)
+        self.configure_sensor(clock)
+
+    def reset(self) -> None:
+        entropy = [self.params.seed, zlib.crc32(self.prefix.encode())]
+        children = np.random.SeedSequence(entropy).spawn(len(self.streams))
+        self.rng = {name: np.random.default_rng(child)
+                    for name, child in zip(self.streams, children, strict=True)}
+        self._queue: deque[tuple[int, float, Sample]] = deque()
+        setattr(self, f"{self.prefix}_count", 0)
+        setattr(self, f"{self.prefix}_time", self.time)
+        self.reset_sensor()
+
+    def update(self) -> None:
+        tick = self.clock.ticks
+        if tick >= self._first_tick and (tick - self._first_tick) % self._period_ticks == 0:
+            self._queue.append((tick + self._latency_ticks, self.time, self.measure()))
+        while self._queue and self._queue[0][0] <= tick:
+            _, stamp, sample = self._queue.popleft()
+            self._deliver(stamp, sample)
+
+    def _deliver(self, stamp: float, sample: Sample) -> None:
+        for name, value in sample.values.items():
+            setattr(self, name, value)
+        if sample.new:
+            count = f"{self.prefix}_count"
+            setattr(self, count, getattr(self, count) + 1)
+            setattr(self, f"{self.prefix}_time", stamp)
+
+    # ----------------------------------------------------------------- helpers
+    def ticks_since(self, tick: int) -> float:
+        """Time from ``tick`` to now, s, from the integer tick difference."""
+        return (self.clock.ticks - tick) * self.clock.step_size
