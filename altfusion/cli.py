@@ -99,6 +99,15 @@ def command_controller_design(args: argparse.Namespace) -> int:
     return 0
 
 
+def command_reproduce(args: argparse.Namespace) -> int:
+    from altfusion.reproduce import ReproduceOptions, reproduction
+
+    options = ReproduceOptions(out=Path(args.out or f"results/reproduce_{args.name}"),
+                               runs=args.runs, workers=args.workers, scheduler=args.scheduler,
+                               master_seed=args.seed, resume=args.resume, models=args.models)
+    return reproduction(args.name).reproduce(options)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="altfusion", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
@@ -131,6 +140,21 @@ def build_parser() -> argparse.ArgumentParser:
                                  help="print the FlightController design (poles, margins)")
     design.set_defaults(handler=command_controller_design)
     add_montecarlo_commands(commands)
+    from altfusion.reproduce import REPRODUCTIONS
+
+    reproduce = commands.add_parser("reproduce",
+                                    help="run a paper's simulation section, write its figures")
+    reproduce.add_argument("name", choices=REPRODUCTIONS)
+    reproduce.add_argument("-n", "--runs", type=int, default=None,
+                           help="Monte Carlo runs (default: the paper's)")
+    reproduce.add_argument("--workers", type=int, default=None)
+    reproduce.add_argument("--scheduler", default=None, help="Dask scheduler address")
+    reproduce.add_argument("--seed", type=int, default=0, help="master seed")
+    reproduce.add_argument("--resume", action="store_true")
+    reproduce.add_argument("--models", type=Path, default=Path("models"))
+    reproduce.add_argument("--out", default=None,
+                           help="output folder (default: results/reproduce_NAME)")
+    reproduce.set_defaults(handler=command_reproduce)
     return parser
 
 
