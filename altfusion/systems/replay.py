@@ -39,9 +39,12 @@ import numpy as np
 
 from altfusion.constants import ISA_T0
 from altfusion.cosim.system import ComponentSpec, Connection, SystemSpec
+from altfusion.estimators.bao import BaoDriftEstimator
 from altfusion.estimators.baseline import BaselineKF
 from altfusion.estimators.hajiyev import HajiyevAdaptiveEstimator
 from altfusion.estimators.whang import WhangGAEstimator
+from altfusion.estimators.xu import XuSHAEKF
+from altfusion.estimators.yang import YangFusionKF
 from altfusion.replay.component import OUTPUT_NAMES
 from altfusion.replay.extract import FlightLog
 
@@ -53,6 +56,10 @@ BASE_STEP = 0.01
 (20 Hz), so each baro and GPS sample reaches the estimators in a step of its own."""
 
 GPS_SIGMA, BARO_SIGMA, BARO_OFFSET_SIGMA = 0.8, 0.6, 200.0
+UNREFERENCED_BARO_SIGMA = 1000.0
+"""Yang's fusion has no bias state: a QNH-referenced baro gets (almost) no weight."""
+ACC_VIBRATION_SIGMA = 9.0
+"""Vertical acceleration noise of the logged, vibration-dominated accelerometer, m/s²."""
 
 REPLAY_TUNING: dict[str, dict[str, Any]] = {
     "BaselineKF": {"R_gps": GPS_SIGMA**2, "R_baro": BARO_SIGMA**2,
@@ -60,6 +67,13 @@ REPLAY_TUNING: dict[str, dict[str, Any]] = {
     "HajiyevAdaptiveEstimator": {"R_gps": GPS_SIGMA**2, "R_baro": BARO_SIGMA**2},
     "WhangGAEstimator": {"R_gps": GPS_SIGMA**2, "R_baro": BARO_SIGMA**2,
                          "P0_b": BARO_OFFSET_SIGMA**2, "Q_b": 0.05**2, "Q_h": 0.5 * 0.2},
+    "BaoDriftEstimator": {"R_baro": BARO_SIGMA**2, "P0_drift": BARO_OFFSET_SIGMA**2,
+                          "R_gps": GPS_SIGMA**2, "user_range_error": GPS_SIGMA / 1.1,
+                          "R_worst": (3 * GPS_SIGMA) ** 2},
+    "YangFusionKF": {"R_gps": GPS_SIGMA**2, "R_baro": UNREFERENCED_BARO_SIGMA**2,
+                     "R_gps_vz": 0.2**2, "R_acc": ACC_VIBRATION_SIGMA**2},
+    "XuSHAEKF": {"R_gps": GPS_SIGMA**2, "R_baro": BARO_SIGMA**2,
+                 "baro_bias_std": BARO_OFFSET_SIGMA, "acc_noise_std": ACC_VIBRATION_SIGMA},
 }
 """Parameters of each estimator for replayed PX4 logs (see the module docstring)."""
 
@@ -67,6 +81,9 @@ CATALOG_ESTIMATORS = {
     "BaselineKF": BaselineKF,
     "HajiyevAdaptiveEstimator": HajiyevAdaptiveEstimator,
     "WhangGAEstimator": WhangGAEstimator,
+    "BaoDriftEstimator": BaoDriftEstimator,
+    "YangFusionKF": YangFusionKF,
+    "XuSHAEKF": XuSHAEKF,
 }
 """The estimators of the catalog replay systems, by FMU model name."""
 
@@ -85,29 +102,49 @@ class CatalogLog:
 
 LOGS = {
     "replay_auterion": CatalogLog(
-        "auterion_esc_status_log.ulg", 43.97, {"H0": 428.924, "T0": 299.88},
+        "auterion_esc_status_log.ulg", 43.97, {"H0": 428.924, "T0": 299.88, "terrain_h": 423.953},
         "Real PX4 flight (Auterion, FMU-v3): baro, GPS, accelerometer and lidar"),
     "replay_px4_sitl": CatalogLog(
-        "pyulog_sample_px4_events.ulg", 31.14, {"H0": 488.005, "T0": 273.15},
+        "pyulog_sample_px4_events.ulg", 31.14, {"H0": 488.005, "T0": 273.15, "terrain_h": 0.0},
         "PX4 SITL take-off and landing (pyulog sample): baro, GPS, accelerometer"),
 }
 
 
 def launch_calibration(log: FlightLog) -> dict[str, float]:
-    """Whang's H0 and T0 at the log's start: the first valid GPS altitude and the first baro
-    temperature; PX4's own datum (0 m, 288.15 K) if the log has no GPS fix or no air data."""
+    """What the log says of its datums: Whang's H0 and T0 at the log's start (the first valid
+    GPS altitude and the first baro temperature; PX4's own datum, 0 m and 288.15 K, if the log
+    has no GPS fix or no air data), and ``terrain_h``, the ground's altitude in the GPS datum
+    under the rangefinder: the median of GPS altitude minus rangefinder height (0 m if the log
+    lacks either)."""
     gps, baro = log.stream("gps"), log.stream("baro")
     if gps is None or baro is None or not len(baro) or gps.valid is None or not gps.valid.any():
-        return {"H0": 0.0, "T0": ISA_T0}
-    first = int(np.flatnonzero(gps.valid)[0])
-    return {"H0": float(gps.values["gps_h"][first]), "T0": float(baro.values["baro_T"][0])}
+        return {"H0": 0.0, "T0": ISA_T0, "terrain_h": 0.0}
+    fixed = np.flatnonzero(gps.valid)
+    calibration = {"H0": float(gps.values["gps_h"][fixed[0]]),
+                   "T0": float(baro.values["baro_T"][0]), "terrain_h": 0.0}
+    for prefix in ("laser", "radar"):
+        ranger = log.stream(prefix)
+        if ranger is None or ranger.valid is None or not ranger.valid.any():
+            continue
+        span = (ranger.time >= gps.time[fixed[0]]) & (ranger.time <= gps.time[fixed[-1]])
+        seen = ranger.valid & span
+        if seen.any():
+            gps_at = np.interp(ranger.time[seen], gps.time[fixed], gps.values["gps_h"][fixed])
+            ground = gps_at - ranger.values[f"{prefix}_h"][seen]
+            calibration["terrain_h"] = float(np.median(ground))
+            break
+    return calibration
+
+
+TUNED_BY_CALIBRATION = {"WhangGAEstimator": ("H0", "T0"), "XuSHAEKF": ("terrain_h",),
+                        "YangFusionKF": ("terrain_h",)}
+"""The calibration entries each estimator takes as parameters."""
 
 
 def replay_tuning(fmu: str, calibration: dict[str, float]) -> dict[str, Any]:
     """The replay parameters of an estimator FMU (empty for estimators not tuned here)."""
     tuning = dict(REPLAY_TUNING.get(fmu, {}))
-    if fmu == "WhangGAEstimator":
-        tuning.update(calibration)
+    tuning.update({key: calibration[key] for key in TUNED_BY_CALIBRATION.get(fmu, ())})
     return tuning
 
 
