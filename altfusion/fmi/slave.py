@@ -117,6 +117,9 @@ class CoreSlave(Fmi2Slave):
             setter = self._input_setter(var) if isinstance(var, Input) else None
             self._register(var.name, var.type, causality, variability, var.description,
                            getter=self._core_getter(var.name), setter=setter)
+        self._getters, self._setters = {}, {}
+        for kind in _FMI_TYPES.values():
+            self._getters[kind], self._setters[kind] = self._accessors(kind)
 
     # ----------------------------------------------------------------- declarations
     @classmethod
@@ -215,42 +218,51 @@ class CoreSlave(Fmi2Slave):
         pass
 
     # ----------------------------------------------------------------- value access
-    def _guarded(self, method, label, vrs, *args):
-        if label.startswith("get"):
+    def _accessors(self, kind: type) -> tuple[dict[int, Any], dict[int, Any]]:
+        """Getters and setters of the variables of FMI type ``kind``, by value reference."""
+        typed = {vr: var for vr, var in self.vars.items() if isinstance(var, kind)}
+        return ({vr: v.getter for vr, v in typed.items()},
+                {vr: v.setter for vr, v in typed.items() if v.setter is not None})
+
+    def _get(self, label: str, getters: dict[int, Any], convert, vrs, fallback) -> list:
+        if self._initializing and self._stale:
             self._refresh_initial_outputs()
         try:
-            return method(vrs, *args)
+            return [convert(getters[vr]()) for vr in vrs]
         except Exception:
             self._log_exception(label)
-            return None
+            return [fallback] * len(vrs)
+
+    def _set(self, label: str, setters: dict[int, Any], vrs, values) -> None:
+        try:
+            for vr, value in zip(vrs, values, strict=True):
+                setters[vr](value)
+        except Exception:
+            self._log_exception(label)
 
     def get_real(self, vrs):
-        values = self._guarded(super().get_real, "getReal", vrs)
-        return [float("nan")] * len(vrs) if values is None else values
+        return self._get("getReal", self._getters[Real], float, vrs, float("nan"))
 
     def get_integer(self, vrs):
-        values = self._guarded(super().get_integer, "getInteger", vrs)
-        return [0] * len(vrs) if values is None else values
+        return self._get("getInteger", self._getters[Integer], int, vrs, 0)
 
     def get_boolean(self, vrs):
-        values = self._guarded(super().get_boolean, "getBoolean", vrs)
-        return [False] * len(vrs) if values is None else values
+        return self._get("getBoolean", self._getters[Boolean], bool, vrs, False)
 
     def get_string(self, vrs):
-        values = self._guarded(super().get_string, "getString", vrs)
-        return [""] * len(vrs) if values is None else values
+        return self._get("getString", self._getters[String], str, vrs, "")
 
     def set_real(self, vrs, values):
-        self._guarded(super().set_real, "setReal", vrs, values)
+        self._set("setReal", self._setters[Real], vrs, values)
 
     def set_integer(self, vrs, values):
-        self._guarded(super().set_integer, "setInteger", vrs, values)
+        self._set("setInteger", self._setters[Integer], vrs, values)
 
     def set_boolean(self, vrs, values):
-        self._guarded(super().set_boolean, "setBoolean", vrs, values)
+        self._set("setBoolean", self._setters[Boolean], vrs, values)
 
     def set_string(self, vrs, values):
-        self._guarded(super().set_string, "setString", vrs, values)
+        self._set("setString", self._setters[String], vrs, values)
 
     # ----------------------------------------------------------------- FMU state
     def _get_fmu_state(self) -> dict[str, Any]:
