@@ -8,7 +8,9 @@ built FMUs in models/). For each system it prints:
 - the real-time factor (simulated s per wall s) through the FMUs and with the core objects
   stepped directly (backend "core"), and their ratio (the FMI overhead ratio);
 - whether both backends give identical results;
-- the wall time per call of each component's do_step and of the runner's own work.
+- the wall time per call of each component's do_step and of the runner's own work;
+- with ``--engines``, the real-time factor of the same SSP in libcosim and ECOS (each run in
+  a fresh process as the interop tests do; start-up is removed by subtracting a 1 s run).
 """
 
 import argparse
@@ -59,11 +61,25 @@ def step_costs(system, fmus, stop):
         (wall - stepping) / base_steps
 
 
+def engine_rtf(engine: str, ssp: Path, stop: float) -> float:
+    """Simulated seconds per wall second of ``engine``, start-up and loading excluded."""
+    from altfusion.interop.engines import run_in_subprocess
+
+    walls = []
+    for duration in (1.0, stop):
+        start = time.perf_counter()
+        run_in_subprocess(engine, ssp, stop_time=duration)
+        walls.append(time.perf_counter() - start)
+    return (stop - 1.0) / max(walls[1] - walls[0], 1e-9)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("systems", nargs="*")
     parser.add_argument("--stop", type=float, default=None, help="simulated time, s")
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--engines", action="store_true",
+                        help="also time the system in libcosim and ECOS (extra 'interop')")
     args = parser.parse_args()
     fmus = {p.stem: p for p in MODELS.glob("*.fmu")}
     names = args.systems or [n for n in SYSTEMS
@@ -87,6 +103,11 @@ def main() -> None:
             print(f"  {component:<14} ({spec.fmu}, step {spec.step_size:g} s): "
                   f"{seconds * 1e6:7.1f} µs per do_step")
         print(f"  runner (transfer, recording, bookkeeping): {runner * 1e6:7.1f} µs per base step")
+        if args.engines:
+            for engine in ("altfusion", "libcosim", "ecos"):
+                rtf = engine_rtf(engine, MODELS / f"{name}.ssp", stop)
+                print(f"  real-time factor, {engine:<9} (own process, start-up excluded): "
+                      f"{rtf:8.1f}")
 
 
 if __name__ == "__main__":
