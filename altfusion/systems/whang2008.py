@@ -6,7 +6,7 @@
   estimator, whose output feeds nothing back.
 * Weather: ISA at launch; every 10 s the lapse rate is drawn anew, N(-0.0065, 0.003²) K/m
   (Section 3's °C/km read as K/m, NOTES.md), and held. A barometer calibrated at launch then
-  errs by about -δΓ·h²/(2 T0): 83 m (1σ) at 4000 m.
+  errs by -δΓ·h²/(2 T0) to first order: 83 m (1σ) at 4000 m, 86 m exactly.
 * AirDataModule every Δt^B = 0.2 s, calibrated at launch (H0 = 0, ISA P0 and T0 = the
   atmosphere at t = 0): baro-height noise 5 m (R_B = 5² m²), temperature noise 1.5 K; no
   drift, wind or quantization (the paper has none).
