@@ -21,6 +21,7 @@ from altfusion.physics.profiles import make_profile
 from altfusion.reproduce import hajiyev, whang2008
 from altfusion.reproduce.common import (
     REFERENCE_FOLDER,
+    load_runs,
     reference_differences,
     reference_results,
 )
@@ -97,8 +98,6 @@ def test_whang_filtering_improves_on_the_compensated_height_in_every_run(whang):
     """Fig. 3: the alpha-beta filter (eqs. 33-34) lowers the error of the compensated height
     h^c (eq. 32). Run by run over the flight (50 runs: 3.0 ± 0.6 m lower, at least 1.8 m)."""
     out, _, _ = whang
-    from altfusion.reproduce.common import load_runs
-
     runs = load_runs(out / "WhangGAEstimator", ("plant.h", "estimator.h_est",
                                                 "estimator.h_comp"))
     flight = runs.time > 0

@@ -24,12 +24,14 @@ and the non-adaptive fusion of run 0 with the RMS over runs; Figs. 2-4), ``hajiy
 factor S(k)) and ``hajiyev.md`` (the table printed at the end).
 """
 
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 from scipy import stats
 
+from altfusion.montecarlo.source import CampaignError
 from altfusion.montecarlo.statistics import Interval, mean_interval
 from altfusion.reproduce import ReproduceOptions
 from altfusion.reproduce.common import (
@@ -346,7 +348,11 @@ def reproduce(options: ReproduceOptions) -> int:
     if status:
         return status
     out = Path(options.out)
-    analysis = analyse(out)
+    try:
+        analysis = analyse(out)
+    except (CampaignError, ValueError) as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
     text = format_table(analysis)
     table = out / "hajiyev.md"
     table.write_text(text)

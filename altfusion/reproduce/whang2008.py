@@ -25,11 +25,13 @@ checks that, and how the final height compares with the compensated height and w
 baro-height once the weather has drifted.
 """
 
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from altfusion.montecarlo.source import CampaignError
 from altfusion.reproduce import ReproduceOptions
 from altfusion.reproduce.common import (
     Campaign,
@@ -264,7 +266,11 @@ def reproduce(options: ReproduceOptions) -> int:
     if status:
         return status
     out = Path(options.out)
-    analysis = analyse(out)
+    try:
+        analysis = analyse(out)
+    except (CampaignError, ValueError) as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
     text = format_tables(analysis)
     table = out / "whang2008.md"
     table.write_text(text)
