@@ -15,9 +15,10 @@ bands) and ``whang2008.md`` (the tables printed at the end).
 Statistics. RMS versus time over runs at every output time (0.2 s); the GPS error only at
 its samples (whole seconds: between them the GPS output holds while the vehicle climbs at
 10 m/s). RMS over a time window pools the window's samples of every run, with a 95 %
-interval that takes each run as one independent sample. Windows: the flight (0, 600] s, the
-climb (0, 440] s and the cruise at 4000 m (440, 600] s, where the weather has changed the
-baro's scale factor most.
+interval that takes each run as one independent sample. Windows: the flight (0, 600] s,
+below 1800 m (0, 200] s, the climb to 4000 m (200, 440] s and the cruise at 4000 m
+(440, 600] s, where the weather has changed the baro's scale factor most; and consecutive
+10 s windows, for "below the GPS level at every time".
 
 The paper gives no numbers, only Fig. 3 and its reading: the estimator "can suppress the
 height estimation errors under the GPS error level" (R_GPS = 70² m²). The claims table
