@@ -84,8 +84,8 @@ def test_whang_final_height_stays_under_the_gps_error_level(whang):
     """Seed 000 Section 3: the estimator "can suppress the height estimation errors under the
     GPS error level" (70 m). The 95 % interval of the final height's RMS over the flight
     (each run one sample) lies below 70 m and below the GPS's own; so does the RMS of every
-    10 s window (one lapse-rate period; 50 samples per run, so its scatter over 10 runs is
-    ±8 % at 95 %: measured at most 58 m, 50 m over 50 runs)."""
+    10 s window (one lapse-rate period), which smooths the ±40 % scatter of single instants
+    over 10 runs: at most 58 m over these 10 runs (50 m over 50), 12 m of margin."""
     _, _, a = whang
     final, gps = a.windows["final", "flight"], a.windows["GPS", "flight"]
     assert final.interval.high < min(whang2008.GPS_SIGMA, gps.interval.low)
