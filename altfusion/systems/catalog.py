@@ -3,9 +3,11 @@
 from collections.abc import Callable
 
 from altfusion.cosim.system import Metric, SystemSpec
+from altfusion.systems.hajiyev import hajiyev, hajiyev_drift
 from altfusion.systems.plant import plant_components, plant_connections
 from altfusion.systems.replay import LOGS, catalog_replay
 from altfusion.systems.sensors import SEED_003_SENSORS, sensor_components, sensor_connections
+from altfusion.systems.whang2008 import whang2008, whang2008_baseline
 
 
 def plant_yang2020() -> SystemSpec:
@@ -53,6 +55,10 @@ SYSTEMS: dict[str, Callable[[], SystemSpec]] = {
     "plant_yang2020": plant_yang2020,
     **{name: (lambda name=name: catalog_replay(name)) for name in LOGS},
     "sensors_yang2020": sensors_yang2020,
+    "whang2008": whang2008,
+    "whang2008_baseline": whang2008_baseline,
+    "hajiyev": hajiyev,
+    "hajiyev_drift": hajiyev_drift,
 }
 
 DEFAULT_SYSTEM = "plant_yang2020"

@@ -1,0 +1,28 @@
+"""Wiring an estimator to the sensor block of :mod:`.sensors` by contract names.
+
+An estimator's inputs carry the names of the sensor outputs they read
+(``../shared/spec/signals.md``): ``baro_*`` come from the ``air_data`` component, ``gps_*``
+from ``gnss``, ``acc_*`` from ``accelerometer``, ``radar_*`` from ``radar`` and ``laser_*``
+from ``laser``. The inputs are those the estimator's core class declares (the FMU declares
+the same; ``system_tests/test_replay.py`` checks them against the built FMUs).
+"""
+
+from altfusion.cosim.system import Connection
+from altfusion.estimators.base import Estimator
+
+SENSOR_OF_PREFIX = {"baro": "air_data", "gps": "gnss", "acc": "accelerometer",
+                    "radar": "radar", "laser": "laser"}
+"""Sensor component (see :data:`altfusion.systems.sensors.SENSORS`) of each signal prefix."""
+
+
+def estimator_connections(estimator: type[Estimator], component: str = "estimator",
+                          ) -> tuple[Connection, ...]:
+    """Every input ``estimator`` declares, from the sensor output of the same name."""
+    connections = []
+    for name in estimator.declared_inputs():
+        sensor = SENSOR_OF_PREFIX.get(name.partition("_")[0])
+        if sensor is None:
+            raise ValueError(f"{estimator.__name__} input '{name}' is no sensor output of "
+                             f"{sorted(SENSOR_OF_PREFIX.values())}")
+        connections.append(Connection(f"{sensor}.{name}", f"{component}.{name}"))
+    return tuple(connections)
