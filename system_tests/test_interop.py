@@ -64,9 +64,13 @@ ENGINE_RUN_SECONDS = 120.0
 """Simulated time per engine run (a system's full length when shorter), to bound CI time."""
 
 JACOBI_LOOP_DELAY = {"plant_yang2020": 1}
-"""Base steps of delay a Jacobi master adds around the system's control loop."""
+"""Base steps of delay a Jacobi master adds around the system's control loop. Only loops
+closed on the noise-free truth have a derivable bound: ``yang2020`` flies on an estimate, so
+the one-step lead there is buried in the estimator's noise-driven error (its Jacobi run is
+still checked bit for bit against libcosim and ECOS)."""
 
-CONTAINER_SUBSYSTEMS = {"plant_yang2020": [("atmosphere", "controller")]}
+CONTAINER_SUBSYSTEMS = {"plant_yang2020": [("atmosphere", "controller")],
+                        "whang2008": [("air_data", "estimator")]}
 """Subsystems packed into one container FMU and checked against the multi-FMU run."""
 
 SINGLE_RATE_SYSTEMS = [name for name in ENGINE_SYSTEMS

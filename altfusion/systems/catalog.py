@@ -8,6 +8,7 @@ from altfusion.systems.plant import plant_components, plant_connections
 from altfusion.systems.replay import LOGS, catalog_replay
 from altfusion.systems.sensors import SEED_003_SENSORS, sensor_components, sensor_connections
 from altfusion.systems.whang2008 import whang2008, whang2008_baseline
+from altfusion.systems.yang2020 import yang2020, yang2020_baseline
 
 
 def plant_yang2020() -> SystemSpec:
@@ -59,9 +60,11 @@ SYSTEMS: dict[str, Callable[[], SystemSpec]] = {
     "whang2008_baseline": whang2008_baseline,
     "hajiyev": hajiyev,
     "hajiyev_drift": hajiyev_drift,
+    "yang2020": yang2020,
+    "yang2020_baseline": yang2020_baseline,
 }
 
-DEFAULT_SYSTEM = "plant_yang2020"
+DEFAULT_SYSTEM = "yang2020"
 
 
 def build_system(name: str) -> SystemSpec:

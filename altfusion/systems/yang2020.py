@@ -1,0 +1,81 @@
+"""Seed 003 Section 4 (Yang et al. 2020) flown closed loop: the default system.
+
+* Trajectory: profile ``yang2020`` (climb, cruise at 1440 m, descent; 420 s), flown by the
+  FlightController on the estimator's output (``estimator.h_est`` and ``estimator.vz_est`` are
+  its feedback), so the estimator's errors show up as tracking errors of the true altitude.
+* Sensors (Section 4.2, :data:`~altfusion.systems.sensors.SEED_003_SENSORS`): GPS 30 m and
+  0.2 m/s every 100 ms, baro 20 m every 10 ms (no scale-factor error, no drift), radio
+  altimeter 10 m every 200 ms over flat terrain at 0 m, accelerometer 0.01 m/s² every 10 ms.
+* ``estimator``: YangFusionKF with its defaults (Section 4.2's variances), stepped at 10 ms.
+
+Every component is stepped at the 0.01 s base step except the GPS receiver (100 ms) and the
+radio altimeter (200 ms), which are stepped at their sample periods. Signals are recorded
+every 0.1 s.
+
+``yang2020_baseline`` is the same loop flown on BaselineKF (baro and GPS only, seed 003's
+variances); the same run of a campaign gives both systems identical weather and sensor noise.
+"""
+
+from altfusion.cosim.system import ComponentSpec, Metric, SystemSpec
+from altfusion.estimators.baseline import BaselineKF
+from altfusion.estimators.yang import YangFusionKF
+from altfusion.systems.plant import plant_components, plant_connections
+from altfusion.systems.sensors import SEED_003_SENSORS, sensor_components, sensor_connections
+from altfusion.systems.wiring import estimator_connections
+
+BASE_STEP = 0.01
+STOP_TIME = 420.0
+SENSOR_NAMES = ("air_data", "gnss", "accelerometer", "radar")
+SENSOR_STEPS = {"gnss": 0.1, "radar": 0.2}
+
+BASELINE = {"R_baro": 400.0, "R_gps": 900.0}
+"""BaselineKF given seed 003's baro and GPS variances (20 m and 30 m)."""
+
+RECORD = ("plant.h", "plant.vz", "plant.az", "controller.h_ref", "controller.thrust",
+          "air_data.baro_h", "gnss.gps_h", "gnss.gps_vz", "radar.radar_h",
+          "accelerometer.acc_z", "estimator.h_est", "estimator.vz_est", "estimator.h_std")
+
+METRICS = (Metric("estimate error", "estimator.h_est", "plant.h"),
+           Metric("tracking error", "plant.h", "controller.h_ref"),
+           Metric("baro_h error", "air_data.baro_h", "plant.h"),
+           Metric("gps_h error", "gnss.gps_h", "plant.h"),
+           Metric("radar_h error", "radar.radar_h", "plant.h"))
+
+
+def _closed_loop(name: str, description: str, estimator: type, parameters: dict,
+                 record: tuple[str, ...] = ()) -> SystemSpec:
+    components = (
+        plant_components("yang2020", step=BASE_STEP)
+        + sensor_components(SENSOR_NAMES, step=BASE_STEP, parameters=SEED_003_SENSORS,
+                            steps=SENSOR_STEPS)
+        + (ComponentSpec("estimator", estimator.__name__, BASE_STEP, parameters),)
+    )
+    return SystemSpec(
+        name=name, description=description, components=components,
+        connections=(plant_connections("estimator.h_est", "estimator.vz_est")
+                     + sensor_connections(SENSOR_NAMES) + estimator_connections(estimator)),
+        stop_time=STOP_TIME, base_step=BASE_STEP, output_interval=0.1,
+        record=RECORD + record, metrics=METRICS,
+    )
+
+
+def yang2020() -> SystemSpec:
+    """Seed 003's scenario flown on YangFusionKF's estimate (the default system)."""
+    return _closed_loop(
+        "yang2020",
+        "Seed 003 Section 4: climb/cruise/descend flown closed loop on YangFusionKF's "
+        "estimate; GPS 30 m / 0.2 m/s at 100 ms, baro 20 m at 10 ms, radio altimeter 10 m at "
+        "200 ms, accelerometer 0.01 m/s² at 10 ms",
+        YangFusionKF, {},
+        ("estimator.h_fused", "estimator.fused_std", "estimator.n_rejected"),
+    )
+
+
+def yang2020_baseline() -> SystemSpec:
+    """The loop of :func:`yang2020` flown on BaselineKF (baro and GPS)."""
+    return _closed_loop(
+        "yang2020_baseline",
+        "Seed 003's scenario (see yang2020) flown closed loop on BaselineKF (baro 20 m, "
+        "GPS 30 m)",
+        BaselineKF, BASELINE,
+    )
