@@ -100,10 +100,20 @@ class _Stepped:
         self.latched = [link.source.value(link.kind, link.slot) for _, _, link in self.delayed]
 
     def apply_inputs(self) -> None:
-        latched = self.latched
-        for write, sources in self._writers:
-            write([latched[position] if position is not None else outputs[kind][slot]
-                   for position, outputs, kind, slot in sources])
+        """Set the inputs, one call per type; a type whose values are all unchanged since
+        the last call is not set again (an FMU keeps its inputs: fmi2Set* is only needed for
+        a change, and sample-held sensor signals change at their own rate)."""
+        latched, written = self.latched, self._written
+        for index, (write, sources) in enumerate(self._writers):
+            values = [latched[position] if position is not None else outputs[kind][slot]
+                      for position, outputs, kind, slot in sources]
+            if values != written[index]:
+                write(values)
+                written[index] = values
+
+    def forget_inputs(self) -> None:
+        """The instance was (re)initialized: its inputs are at their start values again."""
+        self._written = [None] * len(self._writers)
 
 
 class Simulation:
@@ -259,18 +269,21 @@ class Simulation:
         data = np.empty((rows, len(self._recorded)))
         times = np.empty(rows)
         self._record(data, times, 0, 0)
+        tick_time = self.base.time
+        latching = [c for c in self._components if c.delayed]
         for n in range(steps):
-            for component in self._components:
+            for component in latching:
                 if n % component.ratio == 0:
                     component.latch()
             end = n + 1
+            t_end = tick_time(end)
             for component in self._order:
                 ratio = component.ratio
                 if end % ratio:
                     continue
                 component.apply_inputs()
-                t_start = self.base.time(end - ratio)
-                component.step(t_start, self.base.time(end) - t_start)
+                t_start = tick_time(end - ratio)
+                component.step(t_start, t_end - t_start)
                 component.refresh_outputs()
             if end % every == 0:
                 self._record(data, times, end // every, end)
@@ -298,6 +311,7 @@ class Simulation:
             step = self.base.step_size * component.ratio
             component.instance.initialize(parameters, step, start, stop)
         for component in self._components:
+            component.forget_inputs()
             component.refresh_outputs()
         # Upstream first: each component ends initialization with its inputs set from the
         # final initial outputs of its feedthrough sources.

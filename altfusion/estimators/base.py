@@ -15,6 +15,7 @@ with :meth:`Estimator.held_input`, which holds the last finite value over non-fi
 import math
 from abc import abstractmethod
 from dataclasses import dataclass
+from functools import cached_property
 from typing import ClassVar
 
 from altfusion.component import Component
@@ -28,11 +29,11 @@ class Stream:
     values: tuple[str, ...]
     valid: str | None = None
 
-    @property
+    @cached_property
     def count(self) -> str:
         return f"{self.prefix}_count"
 
-    @property
+    @cached_property
     def time(self) -> str:
         return f"{self.prefix}_time"
 

@@ -5,7 +5,8 @@ keeps P symmetric positive semi-definite for any gain, followed by explicit symm
 All arrays are float numpy arrays; a scalar measurement has H of shape (1, n) and R (1, 1).
 """
 
-from dataclasses import dataclass
+from functools import cache
+from typing import NamedTuple
 
 import numpy as np
 
@@ -25,9 +26,8 @@ def predict(x: np.ndarray, P: np.ndarray, F: np.ndarray, Q: np.ndarray,
     return x, symmetrize(F @ P @ F.T + Q)
 
 
-@dataclass(frozen=True)
-class Update:
-    """Result of a measurement update."""
+class Update(NamedTuple):
+    """Result of a measurement update (a named tuple: built once per update, cheaply)."""
 
     x: np.ndarray
     P: np.ndarray
@@ -60,11 +60,24 @@ def update(x: np.ndarray, P: np.ndarray, z: np.ndarray | float, H: np.ndarray,
     z = np.atleast_1d(np.asarray(z, dtype=float))
     R = np.atleast_2d(np.asarray(R, dtype=float))
     y = z - H @ x
-    S = symmetrize(H @ P @ H.T + R)
-    K = gain_scale * np.linalg.solve(S, H @ P).T
-    I_KH = np.eye(len(x)) - K @ H
+    HP = H @ P
+    if len(z) == 1:                   # a scalar S: no symmetrization, no LAPACK (a hot path)
+        S = HP @ H.T + R
+        K = (gain_scale / S[0, 0]) * HP.T
+    else:
+        S = symmetrize(HP @ H.T + R)
+        K = gain_scale * np.linalg.solve(S, HP).T
+    I_KH = _identity(len(x)) - K @ H
     P_new = symmetrize(I_KH @ P @ I_KH.T + K @ R @ K.T)
     return Update(x + K @ y, P_new, y, S, K)
+
+
+@cache
+def _identity(n: int) -> np.ndarray:
+    """I of size n, made once (read only: every use makes a new array from it)."""
+    identity = np.eye(n)
+    identity.flags.writeable = False
+    return identity
 
 
 def scalar_gate(innovation: float, variance: float, sigmas: float) -> bool:

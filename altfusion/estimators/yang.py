@@ -132,12 +132,15 @@ class YangFusionKF(Estimator):
         self.fused_std = 0.0
         self.weights = dict.fromkeys(HEIGHT_SENSORS, 0.0)
         self._stale: set[str] = set()
+        self._model_dt = math.nan
         self._publish()
 
     def propagate(self, dt: float) -> None:
         """Eqs. (10)-(11) with the white-jerk process noise."""
-        self.x, self.P = predict(self.x, self.P, transition(dt),
-                                 white_jerk_noise(dt, self.params.jerk_psd))
+        if dt != self._model_dt:                  # the estimator's step: built once
+            self._model = transition(dt), white_jerk_noise(dt, self.params.jerk_psd)
+            self._model_dt = dt
+        self.x, self.P = predict(self.x, self.P, *self._model)
         self._publish()
 
     def fuse_samples(self, samples) -> None:
@@ -216,7 +219,7 @@ class YangFusionKF(Estimator):
         self.started = True
 
     def _publish(self) -> None:
-        self.h_est, self.vz_est, self.az_est = (float(v) for v in self.x)
+        self.h_est, self.vz_est, self.az_est = self.x.tolist()
         self.h_std = math.sqrt(float(self.P[0, 0]))
         self.weight_gps = self.weights["gps"]
         self.weight_baro = self.weights["baro"]
