@@ -35,6 +35,7 @@ from altfusion.cosim import (  # noqa: E402
     simulate,
     write_ssp,
 )
+from altfusion.cosim.runner import MASTERS  # noqa: E402
 from altfusion.interop.compliance import fmu_problems, ssp_problems  # noqa: E402
 from altfusion.interop.container import (  # noqa: E402
     build_container,
@@ -48,7 +49,9 @@ from altfusion.interop.engines import (  # noqa: E402
 )
 from altfusion.interop.osp import OSP_FILE, write_osp  # noqa: E402
 from altfusion.interop.proxy import python_environment  # noqa: E402
+from altfusion.physics.barometric import height_from_pressure, pressure_at  # noqa: E402
 from altfusion.physics.profiles import make_profile  # noqa: E402
+from altfusion.sensors.air_data import AirDataParams  # noqa: E402
 from altfusion.systems import SYSTEMS, build_system  # noqa: E402
 from altfusion.systems.plant import plant_components, plant_connections  # noqa: E402
 
@@ -63,11 +66,11 @@ ENGINE_SYSTEMS = sorted(SYSTEMS)
 ENGINE_RUN_SECONDS = 120.0
 """Simulated time per engine run (a system's full length when shorter), to bound CI time."""
 
-JACOBI_LOOP_DELAY = {"plant_yang2020": 1}
-"""Base steps of delay a Jacobi master adds around the system's control loop. Only loops
-closed on the noise-free truth have a derivable bound: ``yang2020`` flies on an estimate, so
-the one-step lead there is buried in the estimator's noise-driven error (its Jacobi run is
-still checked bit for bit against libcosim and ECOS)."""
+JACOBI_LOOP_DELAY = {"plant_yang2020": 1, "whang2008": 1}
+"""Base steps of delay a Jacobi master adds around the system's control loop, for loops closed
+on the noise-free truth (plant -> controller: one feedthrough connection). ``yang2020`` flies
+on its estimate through sensors stepped at up to 0.2 s: its path delays and bounds are derived
+in ``test_yang2020_jacobi_sensors_keep_their_errors_and_the_loop_leads``."""
 
 CONTAINER_SUBSYSTEMS = {"plant_yang2020": [("atmosphere", "controller")],
                         "whang2008": [("air_data", "estimator")]}
@@ -245,7 +248,8 @@ def test_ordered_and_jacobi_masters_differ_by_the_derived_loop_delay(engine_runs
     [h_J(t) − h_ref(t+L·dt)] + [h_ref(t+L·dt) − h_ref(t)] − [h_O(t) − h_ref(t)]:
 
     * the middle term is at most max|vz_ref|·L·dt + ½·max|az_ref|·(L·dt)²
-      (12 m/s · 0.01 s = 0.12 m for seed 003's profile);
+      (12 m/s · 0.01 s = 0.12 m for seed 003's profile; whang2008, base step 0.05 s:
+      10 m/s · 0.05 s = 0.5 m, measured 0.503 m against a bound of 0.504 m);
     * the last is the ordered loop's own tracking error e_O (measured: ~1.2e-4 m);
     * the first is the Jacobi loop's tracking error: e_O again, plus the loop's response to
       its feedforward arriving L steps late: each step Δa of the reference acceleration
@@ -263,10 +267,259 @@ def test_ordered_and_jacobi_masters_differ_by_the_derived_loop_delay(engine_runs
     h_diff = np.abs(jacobi["plant.h"] - ordered["plant.h"]).max()
     assert h_diff <= h_bound
     assert h_diff >= terms["vz"] * lag - residual, "the one-step lead must be there"
+    if "atmosphere.p_static" not in ordered.columns:
+        return  # whang2008 records no pressure; its air data is checked at the base step below
     density = ordered["atmosphere.p_static"] / (R_AIR * ordered["atmosphere.T_air"])
     p_bound = (density * G0).max() * residual
     assert np.abs(jacobi["atmosphere.p_static"] - ordered["atmosphere.p_static"]).max() \
         <= p_bound
+
+
+# Sensor and estimator outputs of the ordered and the Jacobi master, recorded at the base step
+# (the engine runs record every 0.1 s or 0.2 s; our Jacobi master equals libcosim and ECOS bit
+# for bit, tested above). Each sensor component is stepped at its sample period T: ordered, it
+# samples its input at the end of its step; Jacobi, the value latched at the step's start, T
+# earlier. Sample instants, counts and every random draw are the same in both runs.
+
+BASE_STEP_RECORD = {
+    "whang2008": ("atmosphere.p_static", "atmosphere.T_air", "air_data.baro_count"),
+    "yang2020": ("atmosphere.p_static", "controller.vz_ref", "controller.az_ref",
+                 "gnss.gps_count", "radar.radar_count", "radar.radar_valid",
+                 "accelerometer.acc_count", "air_data.baro_count"),
+}
+EPS = np.finfo(float).eps
+
+
+@pytest.fixture(scope="module")
+def base_step_runs(fmus):
+    """Our ordered and Jacobi runs of a system's first ENGINE_RUN_SECONDS, every base step."""
+    cache: dict[str, dict[str, object]] = {}
+
+    def get(system: str):
+        if system not in cache:
+            spec = build_system(system)
+            spec = replace(spec, output_interval=spec.base_step,
+                           record=tuple(dict.fromkeys(spec.record + BASE_STEP_RECORD[system])))
+            stop = min(spec.stop_time, ENGINE_RUN_SECONDS)
+            cache[system] = {master: simulate(spec, fmus, stop_time=stop, master=master)
+                             for master in MASTERS}
+        return cache[system]
+    return get
+
+
+def _sensor_error_difference(runs, output: str, truth: str, every: int) -> float:
+    """max |e_J − e_O| of a sensor's error relative to the truth it sampled, over its samples
+    (every ``every`` base steps): the ordered sensor samples the truth of the same row, the
+    Jacobi one that of ``every`` rows earlier. Also checks that the alignment matters: against
+    the same row, the Jacobi error differs by more than 1e-9."""
+    ordered, jacobi = runs["ordered"], runs["jacobi"]
+    rows = np.arange(every, len(ordered.time), every)
+    e_ordered = ordered[output][rows] - ordered[truth][rows]
+    e_jacobi = jacobi[output][rows] - jacobi[truth][rows - every]
+    misaligned = jacobi[output][rows] - jacobi[truth][rows]
+    assert np.abs(misaligned - e_ordered).max() > 1e-9, output
+    return float(np.abs(e_jacobi - e_ordered).max())
+
+
+def _additive_tolerance(runs, output: str, truth: str, roundings: int) -> float:
+    """Float rounding of y = truth + error (zero terms such as a bias of 0.0 add exactly):
+    each of the ``roundings`` operations of magnitude ≤ M errs by ≤ ½ ulp(M), in each run,
+    and the test's own subtraction once more: |e_J − e_O| ≤ (roundings + 1)·ulp(M)."""
+    magnitude = max(np.abs(runs[m][c]).max() for m in MASTERS for c in (output, truth))
+    return (roundings + 1) * float(np.spacing(magnitude))
+
+
+def _baro_tolerance(air_data: AirDataParams, baro_h_max: float) -> float:
+    """|e_J − e_O| of baro_h − h_cal(p_static sampled) = noise + rounding + quantization.
+
+    * baro_h = h_cal(Q(p_cal(h_cal(p) + n))): with no drift, bias or wind (asserted by the
+      callers) the sample is h_cal(p) + n exactly up to rounding and quantization;
+    * quantization: |Q(p') − p'| ≤ res/2, i.e. res/2·|dh/dp| of height, |dh/dp| = R·T/(g·p)
+      of the calibration atmosphere, largest at the highest reading: both runs, res·|dh/dp|;
+    * round trip h → p_cal → h_cal: about 18 roundings reach p_cal's pressure relatively
+      (the power's base errs by ~3ε, amplified by its exponent g/(|Γ|R) = 5.26), i.e.
+      18ε·R·T0/g of height; h_cal's power term errs by ~3ε absolutely, times T0/|Γ|; adding
+      the noise and the test's subtraction: 2 ulp(h); all twice (two runs)."""
+    p = air_data
+    pressure = pressure_at(baro_h_max, p.P0, p.T0, p.lapse_rate, p.H0)
+    temperature = p.T0 + p.lapse_rate * (baro_h_max - p.H0)
+    quantization = p.pressure_resolution * R_AIR * temperature / (G0 * pressure)
+    round_trip = (18 * R_AIR * p.T0 / G0 + 3 * p.T0 / abs(p.lapse_rate)) * EPS \
+        + 2 * float(np.spacing(baro_h_max))
+    return quantization + 2 * round_trip
+
+
+def _calibrated_height(air_data: AirDataParams, pressure: np.ndarray) -> np.ndarray:
+    p = air_data
+    return np.array([height_from_pressure(x, p.P0, p.T0, p.lapse_rate, p.H0) for x in pressure])
+
+
+def _air_data(spec: SystemSpec) -> AirDataParams:
+    params = AirDataParams(**spec.component("air_data").parameters)
+    assert (params.drift_rate, params.drift_variance_rate, params.pressure_bias) == (0, 0, 0)
+    return params
+
+
+def _baro_error_difference(runs, air_data: AirDataParams, every: int) -> float:
+    """As _sensor_error_difference for baro_h against h_cal of the pressure it sampled."""
+    ordered, jacobi = runs["ordered"], runs["jacobi"]
+    rows = np.arange(every, len(ordered.time), every)
+    e_ordered = ordered["air_data.baro_h"][rows] \
+        - _calibrated_height(air_data, ordered["atmosphere.p_static"][rows])
+    e_jacobi = jacobi["air_data.baro_h"][rows] \
+        - _calibrated_height(air_data, jacobi["atmosphere.p_static"][rows - every])
+    return float(np.abs(e_jacobi - e_ordered).max())
+
+
+def _reference(spec: SystemSpec, time: np.ndarray) -> np.ndarray:
+    params = spec.component("controller").parameters
+    profile = make_profile(params["profile"], params.get("profile_offset", 0.0),
+                           params.get("profile_table", ""))
+    return np.array([profile.reference(t) for t in time])
+
+
+def _steady_climb(reference: np.ndarray, history: int) -> np.ndarray:
+    """Rows whose reference acceleration was 0 over the last ``history`` base steps."""
+    still = (reference[:, 2] == 0.0).astype(int)
+    window = np.convolve(still, np.ones(history + 1, dtype=int))[:len(still)]
+    return window == history + 1
+
+
+def test_whang2008_jacobi_sensors_keep_their_errors_and_the_estimator_lags(base_step_runs):
+    """whang2008 (loop on the truth, L = 1; the altitude lead is checked above), sensors:
+
+    * every random draw is the same: the weather (lapse rate redrawn every 10 s at the same
+      ticks) is identical, and each sensor's error relative to the input it sampled (Jacobi:
+      one sensor step earlier, T_B = 0.2 s for the air data, T_G = 1 s for the GPS) agrees to
+      float rounding: gps_h − h and baro_T − T_air (additive, one rounding: 2 ulps),
+      baro_h − h_cal(p_static) (through pressure: the round-trip rounding of _baro_tolerance;
+      no quantization in seed 000).
+
+    Estimator: the Jacobi estimator fuses at t + T_B the samples the ordered one fuses at t, so
+    compare δx(t) = x_J(t + T_B) − x_O(t). Those samples carry the same errors; their truths
+    are older: the air data's by T_B (sampled at t − T_B of the altitude of t − T_B − dt, the
+    loop's lead dt making up for the dt), the GPS's by T_G − dt. In the steady climb (vz_ref =
+    10 m/s, no reference acceleration over the last T_G + T_B) the baro truth is vz·T_B lower,
+    the GPS truth vz·(T_G − dt) lower. The GA filter estimates the bias b from z = h^B − h^GPS
+    with a weight w in [0, 1] and compensates h^c = (h^B − b)/(1 + a); the alpha-beta filter
+    passes a constant offset of h^c unchanged. So, averaged over the window,
+
+        δh_comp, δh_est ∈ [−vz·(T_G − dt), −vz·T_B],   δb ∈ [0, vz·(T_G − dt − T_B)]
+
+    widened by m = max|a|·vz·T_G (the scale factor's share of the offsets; the ordered run's
+    estimate, 0.014) + 2·tracking + kick (the lead's residual, see _loop_residual). Measured
+    means: δh_est −9.47 m, δh_comp −9.47 m, δb 7.35 m (w ≈ 0.98: Q_b is large) against
+    [−9.65, −1.85] and [−0.15, 7.65]. Pointwise the filter is not bounded by this: the one air-data
+    sample after each lapse-rate change sees the old weather in the Jacobi run (up to ~3 K and
+    ~5 m at 1 km), and the slow scale factor keeps that (|δa| up to 0.005: δh up to 11 m)."""
+    system = "whang2008"
+    spec, runs = build_system(system), base_step_runs(system)
+    ordered, jacobi = runs["ordered"], runs["jacobi"]
+    dt = spec.base_step
+    t_b, t_g = (round(spec.component(n).step_size / dt) for n in ("air_data", "gnss"))
+    assert np.array_equal(jacobi["atmosphere.lapse_rate_actual"],
+                          ordered["atmosphere.lapse_rate_actual"])
+    for counter in ("gnss.gps_count", "air_data.baro_count"):
+        assert np.array_equal(jacobi[counter], ordered[counter]), counter
+    for output, truth, every in (("gnss.gps_h", "plant.h", t_g),
+                                 ("air_data.baro_T", "atmosphere.T_air", t_b)):
+        difference = _sensor_error_difference(runs, output, truth, every)
+        assert difference <= _additive_tolerance(runs, output, truth, 1), (output, difference)
+    air_data = _air_data(spec)
+    assert air_data.pressure_resolution == 0 and air_data.temperature_resolution == 0
+    baro_bound = _baro_tolerance(air_data, np.abs(ordered["air_data.baro_h"]).max())
+    assert _baro_error_difference(runs, air_data, t_b) <= baro_bound
+
+    reference = _reference(spec, ordered.time)
+    steady = _steady_climb(reference, t_g + t_b)[:-t_b]
+    vz = reference[:-t_b, 1][steady]
+    assert np.ptp(vz) == 0 and steady.sum() > 1000
+    vz = float(vz[0])
+    terms = _loop_residual(spec, ordered)
+    margin = (np.abs(ordered["estimator.scale_factor"]).max() * vz * t_g * dt
+              + 2 * terms["tracking"] + terms["kick"])
+    lags = {"baro": vz * t_b * dt, "gps": vz * (t_g - 1) * dt}
+
+    def shifted_mean(name: str) -> float:
+        return float((jacobi[name][t_b:] - ordered[name][:-t_b])[steady].mean())
+
+    for name in ("estimator.h_comp", "estimator.h_est"):
+        assert -lags["gps"] - margin <= shifted_mean(name) <= -lags["baro"] + margin, name
+    assert -margin <= shifted_mean("estimator.bias") <= lags["gps"] - lags["baro"] + margin
+
+
+def test_yang2020_jacobi_sensors_keep_their_errors_and_the_loop_leads(base_step_runs):
+    """yang2020 flies on YangFusionKF's estimate: under Jacobi every connection of the loop
+    plant -> sensor -> estimator -> controller adds a latch, and a sensor stepped at T samples
+    the plant T earlier (GNSS 0.1 s, radio altimeter 0.2 s). Extra delay of each path, in base
+    steps (sensor step + estimator + controller): accelerometer 1+1+1 = 3, barometer 4 (the
+    atmosphere too), GNSS 10+1+1 = 12, radio altimeter 20+1+1 = 22.
+
+    (a) Sensors: same draws, same sample instants (counts equal), and each error relative to
+    the truth it sampled agrees to float rounding: gps_h − h, gps_vz − vz, radar_h − h (one
+    rounding: 2 ulps), acc_z − az (az + g, + noise, − g: 3 ulps of g + max|az|, 26.7 m/s² in
+    the start-up transient); the barometer through pressure to its 1.2 Pa quantization:
+    res·R·T/(g·p) at the highest reading (0.11 m; measured 0.109, the two runs' quantization
+    errors are independent and uniform over 12000 samples) plus the round trip.
+
+    (b) Altitude, in the steady climb (vz_ref = 12 m/s, no reference acceleration over the last
+    L_max = 22 steps; before it the estimator's start-up, a 30 m first estimate, dominates).
+    The controller makes its feedback track the reference, so the truth leads the reference
+    by what the estimate lags the truth: a linear unbiased filter fed truths delayed by the
+    paths' delays lags by a weighted mean of them, so Δh = h_J − h_O ≈ vz·L·dt with L in
+    [3, 22] steps. Residuals, measured on the ordered run: the Jacobi loop flies on the same
+    noise up to L_max steps later, r = max|ε_O(t) − ε_O(t − L_max·dt)| of its estimate error
+    ε_O = h_est − h (0.15 m); each loop's tracking of its feedback, 2·max|h_est − h_ref| (0.18 m
+    each); the reference's acceleration step kick G·Δa·L_max·dt (9e-3 m). Pointwise
+    |Δh| ≤ vz·L_max·dt + residual (2.64 + 0.52 m; measured ≤ 2.24 m). Averaged over the window
+    the noise terms cancel but for the telescoped ends of r (2·L_max/N·max|ε_O|) and the mean
+    tracking errors (2·|mean(h_est − h_ref)|), so mean Δh ∈ [vz·3·dt, vz·22·dt] = [0.36,
+    2.64] m widened by these: the lead is there (measured mean 2.10 m, ≈ 17.5
+    steps: the estimate leans on the GNSS and the radio altimeter)."""
+    system = "yang2020"
+    spec, runs = build_system(system), base_step_runs(system)
+    ordered, jacobi = runs["ordered"], runs["jacobi"]
+    dt = spec.base_step
+    steps = {name: round(spec.component(name).step_size / dt)
+             for name in ("gnss", "radar", "accelerometer", "air_data")}
+    for counter in ("gnss.gps_count", "radar.radar_count", "radar.radar_valid",
+                    "accelerometer.acc_count", "air_data.baro_count"):
+        assert np.array_equal(jacobi[counter], ordered[counter]), counter
+    for output, truth, sensor, roundings in (
+            ("gnss.gps_h", "plant.h", "gnss", 1), ("gnss.gps_vz", "plant.vz", "gnss", 1),
+            ("radar.radar_h", "plant.h", "radar", 1),
+            ("accelerometer.acc_z", "plant.az", "accelerometer", 2)):
+        difference = _sensor_error_difference(runs, output, truth, steps[sensor])
+        tolerance = _additive_tolerance(runs, output, truth, roundings)
+        if sensor == "accelerometer":  # the magnitude of its sums is g + |az|
+            magnitude = G0 + max(np.abs(runs[m]["plant.az"]).max() for m in MASTERS)
+            tolerance = 3 * float(np.spacing(magnitude))
+        assert difference <= tolerance, (output, difference, tolerance)
+    air_data = _air_data(spec)
+    baro_bound = _baro_tolerance(air_data, np.abs(ordered["air_data.baro_h"]).max())
+    baro_difference = _baro_error_difference(runs, air_data, steps["air_data"])
+    assert baro_difference <= baro_bound
+    assert baro_difference > baro_bound / 2, "the quantization difference must be there"
+
+    shortest = steps["accelerometer"] + 2
+    longest = steps["radar"] + 2
+    reference = _reference(spec, ordered.time)
+    steady = _steady_climb(reference, longest)
+    steady[:longest] = False
+    vz = reference[steady, 1]
+    assert np.ptp(vz) == 0 and steady.sum() > 1000
+    vz = float(vz[0])
+    error = ordered["estimator.h_est"] - ordered["plant.h"]
+    tracking = ordered["estimator.h_est"] - ordered["controller.h_ref"]
+    drift = np.abs(error[longest:] - error[:-longest])[steady[longest:]].max()
+    kick = _loop_residual(spec, ordered)["kick"] / dt * longest * dt
+    residual = drift + 2 * np.abs(tracking[steady]).max() + kick
+    h_diff = (jacobi["plant.h"] - ordered["plant.h"])[steady]
+    assert np.abs(h_diff).max() <= vz * longest * dt + residual
+    mean_residual = (2 * longest / steady.sum() * np.abs(error[steady]).max()
+                     + 2 * abs(tracking[steady].mean()) + kick)
+    assert vz * shortest * dt - mean_residual <= h_diff.mean() \
+        <= vz * longest * dt + mean_residual
 
 
 # ------------------------------------------------------------------------------ multi-rate
