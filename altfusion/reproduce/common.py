@@ -1,5 +1,6 @@
 """What the paper reproductions share: running their Monte Carlo campaigns, loading the runs
-as arrays, RMS versus time with its confidence band, Markdown tables and reference CSVs.
+as arrays, RMS versus time with its confidence band, paired win counts, Markdown tables and
+reference CSVs.
 
 A reproduction describes each campaign as a :class:`Campaign` (a catalog system, optionally
 with another estimator FMU swapped into its component ``estimator``, and parameter
@@ -24,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from scipy import stats
 
 from altfusion.cosim.results import Results
 from altfusion.cosim.runner import simulate
@@ -192,6 +194,37 @@ def rms_over_runs(errors: np.ndarray, confidence: float = CONFIDENCE) -> Estimat
     mean_squares = np.mean(errors**2, axis=1)
     return Estimate(float(np.sqrt(mean_squares.mean())),
                     root_interval(mean_squares, confidence))
+
+
+# ------------------------------------------------------------------------------ paired runs
+
+
+@dataclass(frozen=True)
+class WinCount:
+    """In how many of ``runs`` paired runs one estimator beat another, with the
+    Clopper-Pearson (exact binomial) interval of the fraction of runs it wins."""
+
+    wins: int
+    runs: int
+    interval: Interval
+
+    @property
+    def fraction(self) -> float:
+        return self.wins / self.runs
+
+    def text(self) -> str:
+        return (f"{self.wins}/{self.runs} [{100 * self.interval.low:.0f}, "
+                f"{100 * self.interval.high:.0f} %]")
+
+
+def paired_wins(errors: np.ndarray, other: np.ndarray,
+                confidence: float = CONFIDENCE) -> WinCount:
+    """Runs (rows) in which ``errors`` have a smaller mean square than ``other``'s errors of
+    the same run; the same run index of campaigns with one master seed sees the same noise."""
+    wins = int(np.sum(np.mean(errors**2, axis=1) < np.mean(other**2, axis=1)))
+    runs = errors.shape[0]
+    low, high = stats.binomtest(wins, runs).proportion_ci(confidence, method="exact")
+    return WinCount(wins, runs, Interval(float(low), float(high)))
 
 
 # ------------------------------------------------------------------------------ output

@@ -3,6 +3,7 @@
 from collections.abc import Callable
 
 from altfusion.cosim.system import Metric, SystemSpec
+from altfusion.systems.bao2017 import bao2017
 from altfusion.systems.hajiyev import hajiyev, hajiyev_drift
 from altfusion.systems.plant import plant_components, plant_connections
 from altfusion.systems.replay import LOGS, catalog_replay
@@ -62,6 +63,7 @@ SYSTEMS: dict[str, Callable[[], SystemSpec]] = {
     "hajiyev_drift": hajiyev_drift,
     "yang2020": yang2020,
     "yang2020_baseline": yang2020_baseline,
+    "bao2017": bao2017,
 }
 
 DEFAULT_SYSTEM = "yang2020"
