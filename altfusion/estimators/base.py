@@ -29,6 +29,14 @@ class Stream:
     values: tuple[str, ...]
     valid: str | None = None
 
+    def __hash__(self) -> int:
+        """The fields' hash, computed once (streams key the per-step sample dicts)."""
+        return self._hash
+
+    @cached_property
+    def _hash(self) -> int:
+        return hash((self.prefix, self.values, self.valid))
+
     @cached_property
     def count(self) -> str:
         return f"{self.prefix}_count"

@@ -57,8 +57,8 @@ def update(x: np.ndarray, P: np.ndarray, z: np.ndarray | float, H: np.ndarray,
     ``gain_scale`` (a weight α ≤ 1 on the gain, seed 004 eq. 26) keeps the Joseph form exact
     for the gain actually used.
     """
-    z = np.atleast_1d(np.asarray(z, dtype=float))
-    R = np.atleast_2d(np.asarray(R, dtype=float))
+    z = np.asarray(z, dtype=float).reshape(-1)
+    R = np.asarray(R, dtype=float).reshape(len(z), len(z))
     y = z - H @ x
     HP = H @ P
     if len(z) == 1:                   # a scalar S: no symmetrization, no LAPACK (a hot path)

@@ -45,6 +45,7 @@ by eq. (15).
 import math
 from collections import deque
 from dataclasses import dataclass
+from functools import cache
 
 import numpy as np
 
@@ -55,6 +56,20 @@ from altfusion.params import param
 IDENTITY = np.eye(3)
 HEIGHT_SENSORS = ("radar", "gps", "baro")
 """The height sensors in benchmark order: largest sampling period first (Section 4.2)."""
+
+
+HEIGHT_STREAMS = (("baro", BARO_TIMED, "baro_h", "baro_time"),
+                  ("gps", GPS_VZ_TIMED, "gps_h", "gps_time"),
+                  ("radar", RADAR_TIMED, "radar_h", "radar_time"))
+"""Each height sensor's stream, height input and time-stamp input."""
+
+
+@cache
+def measurement_matrix(rows: tuple[int, ...]) -> np.ndarray:
+    """The rows of H = I (eq. 12) for the measurements of a step (read only, made once)."""
+    H = IDENTITY[list(rows)]
+    H.flags.writeable = False
+    return H
 
 
 def unify_time(history, t_b: float) -> float:
@@ -145,11 +160,9 @@ class YangFusionKF(Estimator):
 
     def fuse_samples(self, samples) -> None:
         """Gate and store the new heights, fuse at a benchmark sample, then one KF update."""
-        heights = {"baro": (samples.get(BARO_TIMED), "baro_h", "baro_time"),
-                   "gps": (samples.get(GPS_VZ_TIMED), "gps_h", "gps_time"),
-                   "radar": (samples.get(RADAR_TIMED), "radar_h", "radar_time")}
         arrived = set()
-        for name, (sample, value, stamp) in heights.items():
+        for name, stream, value, stamp in HEIGHT_STREAMS:
+            sample = samples.get(stream)
             if sample is None:
                 continue
             z = sample[value] + (self.params.terrain_h if name == "radar" else 0.0)   # (6)
@@ -176,7 +189,7 @@ class YangFusionKF(Estimator):
             measurements.append((2, acc["acc_z"], self.params.R_acc))
         if measurements:
             rows, z, R = zip(*measurements, strict=True)
-            result = update(self.x, self.P, np.array(z), IDENTITY[list(rows)],
+            result = update(self.x, self.P, np.array(z), measurement_matrix(rows),
                             np.diag(R))                                        # (12)-(14)
             self.x, self.P = result.x, result.P
         self._publish()
