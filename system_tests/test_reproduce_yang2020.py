@@ -69,9 +69,10 @@ def test_yang_weighted_fusion_sigma_matches_its_theory(yang):
 def test_yang_kalman_filter_beats_every_sensor_and_the_fusion_in_every_run(yang):
     """Section 4.2's "499 / 491 / 388 times better than GPS / baro / radio altimeter", read as
     counts of runs (NOTES.md): here the filter's σ of eq. (15) is below every sensor's and
-    below the weighted fusion's in every run (all 250 runs of the full reproduction). By a
+    below the weighted fusion's in every run (all 125 runs of the full reproduction). By a
     wide margin: the 95 % interval of the filter's RMS (each run one sample, t with 3
-    degrees of freedom) lies below σ_Y / 4 = 2.14 m; measured 0.8-0.9 m, a factor of ~10."""
+    degrees of freedom) lies below σ_Y / 4 = 2.14 m (125 runs: 0.86 [0.76, 0.95] m, a
+    factor of 9.9)."""
     _, _, a = yang
     for way in (*yang2020.SENSORS, "weighted fusion"):
         assert a.beats("YangFusionKF", way) == RUNS, way
@@ -81,7 +82,7 @@ def test_yang_kalman_filter_beats_every_sensor_and_the_fusion_in_every_run(yang)
 def test_yang_baseline_kf_runs_in_the_scenario_and_loses_to_the_paper_s_filter(yang):
     """BaselineKF (baro + GPS, no radio altimeter, no IMU) flies the same loop on the same
     sensor noise (paired runs): YangFusionKF's σ of eq. (15) is below BaselineKF's in every
-    run (250 of 250 in the full reproduction: 0.8 m against 12.5 m)."""
+    run (125 of 125 in the full reproduction: 0.86 m against 12.6 m)."""
     _, stdout, a = yang
     print(f"BaselineKF: RMS {a.rms('BaselineKF').text(3)} m, tracking error "
           f"{a.tracking['BaselineKF'].text(3)} m")
