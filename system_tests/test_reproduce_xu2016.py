@@ -51,15 +51,16 @@ def test_xu_reproduction_writes_the_figures_and_the_tables(xu):
 
 
 def test_xu_estimate_never_diverges(xu):
-    """No divergence (strong tracking, eqs. 23-24): in every scenario, run and output time
-    XuSHAEKF's estimate is finite and within ``DIVERGENCE`` = 5 m of the truth, three times
-    the largest bound of Section 3.2 (measured: at most 3.1 m, in the wind, at the hand-over
-    from the laser to the barometer)."""
+    """No divergence (strong tracking, eqs. 23-24): in every scenario and run XuSHAEKF's
+    estimate is finite at every output time and its RMS error over the run's last 20 s is
+    back within the bound of the altitude it ends at (1 m at 15 m, 1.2 m at 35 m and 37 m,
+    1.5 m at 37 m in the wind; measured at most 0.5 m). Single errors can exceed the bounds
+    (see the README's findings); a diverging filter's would keep growing."""
     _, _, a = xu
     for name, scenario in a.scenarios.items():
-        errors = scenario.errors["XuSHAEKF"]
-        assert np.all(np.isfinite(errors)), name
-        assert scenario.largest_error["XuSHAEKF"] < xu2016.DIVERGENCE, name
+        assert np.all(np.isfinite(scenario.errors["XuSHAEKF"])), name
+        assert np.all(scenario.final_rms("XuSHAEKF") <= scenario.final_bound()), name
+        assert not scenario.diverged("XuSHAEKF"), name
 
 
 @pytest.mark.parametrize("name", list(xu2016.SCENARIOS))

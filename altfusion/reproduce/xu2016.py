@@ -18,8 +18,11 @@ Each bound is checked for the RMS of the errors (95 % interval taking each run a
 sample) and for the 95th percentile of their magnitudes (95 % bootstrap interval over runs),
 and holds if the interval's upper end is within it. The GPS failure is judged on the same run
 before (30-60 s) and after it (60-120 s): the paired difference of the runs' mean squares,
-with its t interval. No divergence: every estimate stays finite and within ``DIVERGENCE`` of
-the truth at every time of every run.
+with its t interval. No divergence: every estimate is finite at every time of every run, and
+its RMS error over the run's last ``FINAL_WINDOW`` seconds is within the bound of the altitude
+it ends at (a diverging filter's error grows; this one's returns within the bound after every
+disturbance). The largest single error of any run is reported beside the bounds: the paper
+states its bounds as bounds on the error itself.
 
 Written to the output folder: ``xu2016_fig10_11.png`` (RMS over runs versus time in the two
 hovers, with 95 % chi-square bands), ``xu2016_fig12_13.png`` (run 0's altitude in the wind
@@ -55,10 +58,12 @@ from altfusion.systems.catalog import build_system
 from altfusion.systems.xu2016 import GPS_FAILURE_TIME
 
 DEFAULT_RUNS = 50
-"""The paper gives none. The bounds are checked with intervals that take each run as one
-sample: with 50 runs the RMS's 95 % interval is within ±10 % in every band (the runs' RMS
-scatter by about ±30 %), far narrower than the margins to the bounds, and the four campaigns
-take about 40 minutes on two cores (a 1000 s multipoint run takes 25 s)."""
+"""The paper gives none (it flies single flights). The bounds are checked on intervals that
+take each run as one sample: 20 runs give the RMS above 25 m within ±8 % (no wind) to ±19 %
+(a hover whose runs include a rare error spike), 50 runs about 0.63 times that, narrow
+against the margins to the bounds (the RMS is a third of them) while resolving differences
+between the estimators of a few per cent. A 1000 s multipoint run costs about 25 s of CPU,
+a hover 6 s: the four campaigns take about half an hour on two idle cores."""
 
 TAKE_OFF = 5.0
 """The profiles leave the ground at 5 s; statistics start there."""
@@ -70,8 +75,8 @@ BEFORE_FAILURE = (30.0, GPS_FAILURE_TIME)
 AFTER_FAILURE = (GPS_FAILURE_TIME, 120.0)
 """Windows (start, end] of the GPS-failure comparison, s: hovering at 15 m since 16.5 s."""
 
-DIVERGENCE = 5.0
-"""|error| above this (m), anywhere, counts as divergence: 3× the largest bound."""
+FINAL_WINDOW = 20.0
+"""The last seconds of each run, over which the error must be back within the bound, s."""
 
 PERCENTILE = 95.0
 
@@ -134,8 +139,8 @@ class ScenarioAnalysis:
     """By estimator label: estimate minus truth (runs × times)."""
     bands: dict[str, np.ndarray]
     """Times (mask) of each altitude band of the scenario's bounds, after take-off."""
-    largest_error: dict[str, float]
-    """Largest |error| over all runs and times, by estimator (NaN if any is not finite)."""
+    bounds: dict[str, float]
+    """The scenario's bounds by band (``Scenario.bounds``)."""
     strong_tracking: float
     rejected: dict[str, float]
     """Mean per run: XuSHAEKF's strong-tracking steps; samples rejected by each gate."""
@@ -145,6 +150,25 @@ class ScenarioAnalysis:
 
     def percentile(self, estimator: str, band: str) -> Estimate:
         return percentile_over_runs(self.errors[estimator][:, self.bands[band]], PERCENTILE)
+
+    def largest(self, estimator: str, band: str) -> float:
+        """The largest |error| of any run in the band (NaN if any is not finite)."""
+        return float(np.max(np.abs(self.errors[estimator][:, self.bands[band]])))
+
+    def final_rms(self, estimator: str) -> np.ndarray:
+        """Each run's RMS error over its last ``FINAL_WINDOW`` seconds."""
+        window = (self.time[-1] - FINAL_WINDOW, self.time[-1])
+        return np.sqrt(window_mean_squares(self.errors[estimator], self.time, window))
+
+    def final_bound(self) -> float:
+        """The bound of the band the flight ends in."""
+        return next(bound for band, bound in self.bounds.items() if self.bands[band][-1])
+
+    def diverged(self, estimator: str) -> bool:
+        """Not finite somewhere, or not back within the final bound at the end of a run."""
+        errors = self.errors[estimator]
+        return bool(not np.all(np.isfinite(errors))
+                    or np.any(self.final_rms(estimator) > self.final_bound()))
 
     def curve(self, estimator: str) -> RmsCurve:
         return rms_curve(estimator, self.time, self.errors[estimator])
@@ -167,10 +191,9 @@ def _scenario_analysis(out: Path, scenario: Scenario) -> ScenarioAnalysis:
     bands = {"low": flying & (reference <= SWITCH_H), "high": flying & (reference >= SWITCH_H)}
     errors = {label: runs.error(f"{component}.h_est", "plant.h")
               for label, component in estimators.items()}
-    largest = {label: float(np.max(np.abs(e))) for label, e in errors.items()}
     return ScenarioAnalysis(
         runs.time, runs["plant.h"][0], reference, errors,
-        {band: bands[band] for band in scenario.bounds}, largest,
+        {band: bands[band] for band in scenario.bounds}, dict(scenario.bounds),
         float(runs["estimator.n_strong_tracking"][:, -1].mean()),
         {"XuSHAEKF": float(runs["estimator.n_rejected"][:, -1].mean()),
          "BaselineKF": float(runs["baseline.n_rejected"][:, -1].mean())})
@@ -247,9 +270,11 @@ def bounds_table(analysis: XuAnalysis) -> str:
                 paper = f"≤ {bound:g}" if estimator == "XuSHAEKF" else "-"
                 rows.append((scenario.campaign.label, BAND_LABELS[band], estimator, paper,
                              rms.text(3), p95.text(3),
-                             _verdict(within(rms, bound) and within(p95, bound))))
+                             _verdict(within(rms, bound) and within(p95, bound)),
+                             f"{a.largest(estimator, band):.3g}"))
     return markdown_table(("scenario", "band", "estimator", "paper's bound [m]",
-                           "RMS [m]", "95th percentile of |error| [m]", "within the bound"),
+                           "RMS [m]", "95th percentile of |error| [m]",
+                           "RMS and 95th percentile within the bound", "largest |error| [m]"),
                           rows)
 
 
@@ -278,10 +303,11 @@ def claims_table(analysis: XuAnalysis) -> str:
                            else better.interval.high) < 0)))
     for name, scenario in SCENARIOS.items():
         a = analysis.scenarios[name]
-        largest = ", ".join(f"{e} {v:.3g} m" for e, v in a.largest_error.items())
-        rows.append((f"{scenario.campaign.label}: largest |error| of any run (divergence "
-                     f"above {DIVERGENCE:g} m)", "no divergence", largest,
-                     _verdict(a.largest_error["XuSHAEKF"] < DIVERGENCE)))
+        final = ", ".join(f"{e} {a.final_rms(e).max():.3g} m" for e in a.errors)
+        rows.append((f"{scenario.campaign.label}: no divergence (finite, and the largest "
+                     f"RMS over a run's last {FINAL_WINDOW:g} s within "
+                     f"{a.final_bound():g} m)", "no divergence", final,
+                     _verdict(not a.diverged("XuSHAEKF"))))
     return markdown_table(("claim", "paper", f"ours ({analysis.runs} runs, [95 % CI])",
                            "holds"), rows)
 

@@ -29,7 +29,7 @@ hovers of Section 3.2, as catalog systems.
 * Wind grade 3 (``xu2016_multipoint_wind``, Fig. 13): Beaufort 3 is 3.4-5.4 m/s; the
   Atmosphere's wind is 4.4 m/s mean with Gauss-Markov gusts of σ 1 m/s (2 s correlation),
   which keep it mostly within that band. It acts through the barometer's static port: ½ρv²
-  = 11.6 Pa at 4.4 m/s, about 1 m of baro height, varying by 0.44 m per 1 m/s of gust. The
+  = 11.8 Pa at 4.4 m/s, about 1 m of baro height, varying by 0.45 m per 1 m/s of gust. The
   vertical dynamics have no wind force; the paper's Fig. 13 shows the hover held.
 * ``estimator``: XuSHAEKF with its defaults, which are the nominal variances of these sensors
   (R_gps 9 m², R_baro 0.25 m², R_laser 2.5e-5 m², σ_a 0.05 m/s²) and the choices its
