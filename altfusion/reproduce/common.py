@@ -227,6 +227,26 @@ def paired_wins(errors: np.ndarray, other: np.ndarray,
     return WinCount(wins, runs, Interval(float(low), float(high)))
 
 
+BOOTSTRAP_RESAMPLES = 1000
+BOOTSTRAP_SEED = 0
+
+
+def percentile_over_runs(errors: np.ndarray, q: float, confidence: float = CONFIDENCE,
+                         resamples: int = BOOTSTRAP_RESAMPLES) -> Estimate:
+    """The ``q``-th percentile of |errors| pooled over all samples (runs × samples), with a
+    percentile-bootstrap interval that resamples whole runs (samples within a run are
+    correlated; the runs are independent), with a fixed seed."""
+    magnitudes = np.abs(errors)
+    value = float(np.percentile(magnitudes, q))
+    runs = magnitudes.shape[0]
+    if runs < 2:
+        return Estimate(value, None)
+    picks = np.random.default_rng(BOOTSTRAP_SEED).integers(0, runs, (resamples, runs))
+    replicas = [np.percentile(magnitudes[pick], q) for pick in picks]
+    low, high = np.percentile(replicas, [50 * (1 - confidence), 50 * (1 + confidence)])
+    return Estimate(value, Interval(float(low), float(high)))
+
+
 # ------------------------------------------------------------------------------ output
 
 

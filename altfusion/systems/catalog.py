@@ -9,6 +9,12 @@ from altfusion.systems.plant import plant_components, plant_connections
 from altfusion.systems.replay import LOGS, catalog_replay
 from altfusion.systems.sensors import SEED_003_SENSORS, sensor_components, sensor_connections
 from altfusion.systems.whang2008 import whang2008, whang2008_baseline
+from altfusion.systems.xu2016 import (
+    xu2016_hover15,
+    xu2016_hover35,
+    xu2016_multipoint,
+    xu2016_multipoint_wind,
+)
 from altfusion.systems.yang2020 import yang2020, yang2020_baseline
 
 
@@ -64,6 +70,10 @@ SYSTEMS: dict[str, Callable[[], SystemSpec]] = {
     "yang2020": yang2020,
     "yang2020_baseline": yang2020_baseline,
     "bao2017": bao2017,
+    "xu2016_hover15": xu2016_hover15,
+    "xu2016_hover35": xu2016_hover35,
+    "xu2016_multipoint": xu2016_multipoint,
+    "xu2016_multipoint_wind": xu2016_multipoint_wind,
 }
 
 DEFAULT_SYSTEM = "yang2020"
