@@ -54,9 +54,8 @@ def test_xu_estimate_never_diverges(xu):
     """No divergence (strong tracking, eqs. 23-24): in every scenario and run XuSHAEKF's
     estimate is finite at every output time and its RMS error over the run's last 20 s is
     back within the bound of the altitude it ends at (1 m at 15 m, 1.2 m at 35 m and 37 m,
-    1.5 m at 37 m in the wind; over the README's 20 runs at most 1.06 m, in a hover-35 run
-    whose error spike fell into its last 20 s). Single errors can exceed the bounds (see the
-    README's findings); a diverging filter's would keep growing."""
+    1.5 m at 37 m in the wind; over the README's 20 runs at most 0.76 m). Single errors can
+    exceed the bounds (see the README's findings); a diverging filter's would keep growing."""
     _, _, a = xu
     for name, scenario in a.scenarios.items():
         assert np.all(np.isfinite(scenario.errors["XuSHAEKF"])), name

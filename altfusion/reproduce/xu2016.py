@@ -59,11 +59,11 @@ from altfusion.systems.xu2016 import GPS_FAILURE_TIME
 
 DEFAULT_RUNS = 50
 """The paper gives none (it flies single flights). The bounds are checked on intervals that
-take each run as one sample: 20 runs give the RMS above 25 m within ±8 % (no wind) to ±19 %
-(a hover whose runs include a rare error spike), 50 runs about 0.63 times that, narrow
+take each run as one sample: 20 runs give the RMS above 25 m within ±4 % (multipoint) to
+±13 % (the 120 s hover), 50 runs about 0.63 times that, narrow
 against the margins to the bounds (the RMS is a third of them) while resolving differences
 between the estimators of a few per cent. A 1000 s multipoint run costs about 25 s of CPU,
-a hover 6 s: the four campaigns take about half an hour on two idle cores."""
+a hover 6 s: the four campaigns take about 20 minutes on two idle cores."""
 
 TAKE_OFF = 5.0
 """The profiles leave the ground at 5 s; statistics start there."""
