@@ -7,8 +7,10 @@ reference result that the FMU run must reproduce.
 
 import atexit
 import copy
+import ctypes
 import importlib
 import itertools
+import os
 import zipfile
 from ctypes import byref
 from dataclasses import dataclass, replace
@@ -179,6 +181,27 @@ def _release_pythonfmu_state() -> None:
     for library in _PYTHONFMU_LIBRARIES.values():
         library.finalizePythonInterpreter()
     _PYTHONFMU_LIBRARIES.clear()
+
+
+def release_mapped_pythonfmu_state() -> None:
+    """:func:`_release_pythonfmu_state` for every pythonfmu library mapped into this process,
+    including those a third-party engine loaded itself (libcosim and ECOS open the FMUs'
+    libraries without fmpy): each shared library in ``/proc/self/maps`` that exports
+    ``finalizePythonInterpreter``. Register it with :mod:`atexit` in an engine's process."""
+    _release_pythonfmu_state()
+    try:
+        maps = Path("/proc/self/maps").read_text()
+    except OSError:                                   # not Linux: nothing to find this way
+        return
+    fields = (line.split(maxsplit=5) for line in maps.splitlines())
+    for path in sorted({f[5] for f in fields if len(f) == 6 and f[5].endswith(".so")}):
+        try:
+            library = ctypes.CDLL(path, mode=os.RTLD_NOLOAD | os.RTLD_LAZY)
+        except OSError:
+            continue
+        finalize = getattr(library, "finalizePythonInterpreter", None)
+        if finalize is not None:
+            finalize()
 
 
 def _track_library(path: Path, fmu: FMU2Slave) -> None:

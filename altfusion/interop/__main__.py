@@ -5,10 +5,14 @@
         --output plant.h --csv out.csv [--input inputs.npy]
 
 Third-party engines may unload FMU libraries, which pythonfmu does not survive within one
-process: the tests run each engine through this entry point in a fresh process.
+process: the tests run each engine through this entry point in a fresh process. At exit, the
+pythonfmu state of every FMU library the engine loaded is released before the C++ static
+destructors run (``altfusion.cosim.instances.release_mapped_pythonfmu_state``), which
+otherwise abort the process now and then ("corrupted double-linked list").
 """
 
 import argparse
+import atexit
 import sys
 from pathlib import Path
 
@@ -16,8 +20,10 @@ import numpy as np
 
 
 def main(argv: list[str] | None = None) -> int:
+    from altfusion.cosim.instances import release_mapped_pythonfmu_state
     from altfusion.interop.engines import ENGINES, run_engine
 
+    atexit.register(release_mapped_pythonfmu_state)
     parser = argparse.ArgumentParser(prog="python -m altfusion.interop",
                                      description=__doc__.split("\n\n")[0])
     commands = parser.add_subparsers(dest="command", required=True)

@@ -33,7 +33,13 @@ from pathlib import Path
 
 import numpy as np
 
-from altfusion.cosim.instances import FMI_TYPES, CoreInstance, CosimError, fmu_info
+from altfusion.cosim.instances import (
+    FMI_TYPES,
+    CoreInstance,
+    CosimError,
+    fmu_info,
+    release_mapped_pythonfmu_state,
+)
 from altfusion.cosim.results import Results
 from altfusion.cosim.runner import simulate
 from altfusion.cosim.ssp import read_ssp
@@ -198,6 +204,9 @@ def run_libcosim(source: Path, system: SystemSpec, fmu_paths: dict[str, Path],
             raise EngineError(f"libcosim's time-series observer lost samples of "
                               f"{recording.signals[i].path}")
         data[:, i] = values[np.searchsorted(numbers, grid, side="right") - 1]
+    # libcosim unloads the FMU libraries when the execution is freed: release pythonfmu's
+    # state first, or the unload may abort the process (see release_mapped_pythonfmu_state).
+    release_mapped_pythonfmu_state()
     return recording.results(data.tolist())
 
 
@@ -258,6 +267,7 @@ def run_ecos(ssp: Path, system: SystemSpec, fmu_paths: dict[str, Path],
             rows.append(sample())
         simulation.terminate()
     finally:
+        release_mapped_pythonfmu_state()        # before ECOS unloads the libraries
         simulation.free()
     return recording.results(rows)
 
