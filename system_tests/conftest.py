@@ -1,7 +1,9 @@
 """System tests run whole systems of built FMUs through fmpy: build them first
 (``python build_fmu.py``); these fixtures refuse stale or missing FMUs."""
 
+import subprocess
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -25,3 +27,20 @@ def fmus() -> dict[str, Path]:
 def ssp_files(fmus) -> dict[str, Path]:
     """Built SSP archives by system name."""
     return {path.stem: path for path in MODELS.glob("*.ssp")}
+
+
+REPRODUCE_WORKERS = 2
+
+
+@pytest.fixture(scope="session")
+def reproduce_cli(fmus) -> Callable[[str, int, Path], str]:
+    """``altfusion reproduce NAME -n RUNS --out OUT`` in a subprocess on the built models, two
+    workers; returns its standard output (fails the test with its error output otherwise)."""
+    def run(name: str, runs: int, out: Path) -> str:
+        completed = subprocess.run(
+            [sys.executable, "-m", "altfusion.cli", "reproduce", name, "-n", str(runs),
+             "--workers", str(REPRODUCE_WORKERS), "--models", str(MODELS), "--out", str(out)],
+            capture_output=True, text=True, timeout=600, cwd=ROOT)
+        assert completed.returncode == 0, completed.stderr[-3000:]
+        return completed.stdout
+    return run

@@ -6,8 +6,6 @@ Each statistical assertion states its tolerance and where it comes from; the num
 full reproduction are in the README ("Paper reproduction: seed 001 (Bao et al.)").
 """
 
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -39,19 +37,13 @@ ROOT = Path(__file__).resolve().parents[1]
 MODELS = ROOT / "models"
 RUNS = 5
 """Five runs: the fewest in which winning every run is significant at 95 % (2⁻⁵ = 3 %)."""
-WORKERS = 2
 
 
 @pytest.fixture(scope="module")
-def bao(fmus, tmp_path_factory):
+def bao(reproduce_cli, tmp_path_factory):
     """``altfusion reproduce bao2017 -n RUNS``: its folder, standard output and analysis."""
     out = tmp_path_factory.mktemp("bao2017")
-    completed = subprocess.run(
-        [sys.executable, "-m", "altfusion.cli", "reproduce", "bao2017", "-n", str(RUNS),
-         "--workers", str(WORKERS), "--models", str(MODELS), "--out", str(out)],
-        capture_output=True, text=True, timeout=600, cwd=ROOT)
-    assert completed.returncode == 0, completed.stderr[-3000:]
-    return out, completed.stdout, bao2017.analyse(out)
+    return out, reproduce_cli("bao2017", RUNS, out), bao2017.analyse(out)
 
 
 def phase_rows(time: np.ndarray, index: int) -> np.ndarray:

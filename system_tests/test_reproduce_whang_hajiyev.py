@@ -30,26 +30,15 @@ from altfusion.systems.hajiyev import DRIFT, R_BARO, R_GPS, STOP_TIME
 ROOT = Path(__file__).resolve().parents[1]
 MODELS = ROOT / "models"
 RUNS = 10
-WORKERS = 2
-
-
-def reproduce(name: str, out: Path) -> str:
-    """``altfusion reproduce NAME -n RUNS`` in a subprocess; its standard output."""
-    completed = subprocess.run(
-        [sys.executable, "-m", "altfusion.cli", "reproduce", name, "-n", str(RUNS),
-         "--workers", str(WORKERS), "--models", str(MODELS), "--out", str(out)],
-        capture_output=True, text=True, timeout=600, cwd=ROOT)
-    assert completed.returncode == 0, completed.stderr[-3000:]
-    return completed.stdout
 
 
 # ------------------------------------------------------------------------------ seed 000
 
 
 @pytest.fixture(scope="module")
-def whang(fmus, tmp_path_factory):
+def whang(reproduce_cli, tmp_path_factory):
     out = tmp_path_factory.mktemp("whang2008")
-    return out, reproduce("whang2008", out), whang2008.analyse(out)
+    return out, reproduce_cli("whang2008", RUNS, out), whang2008.analyse(out)
 
 
 def test_whang_reproduction_writes_fig3_and_the_table(whang):
@@ -145,9 +134,9 @@ def test_whang_campaign_run_0_is_the_reference(whang):
 
 
 @pytest.fixture(scope="module")
-def hajiyev_runs(fmus, tmp_path_factory):
+def hajiyev_runs(reproduce_cli, tmp_path_factory):
     out = tmp_path_factory.mktemp("hajiyev")
-    return out, reproduce("hajiyev", out), hajiyev.analyse(out)
+    return out, reproduce_cli("hajiyev", RUNS, out), hajiyev.analyse(out)
 
 
 def test_hajiyev_reproduction_writes_the_figures_and_the_table(hajiyev_runs):

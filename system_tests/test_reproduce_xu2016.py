@@ -9,8 +9,6 @@ t = 12.7, hence wide). The numbers of the full reproduction are in the README ("
 reproduction: seed 004 (Xu et al.)").
 """
 
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -25,19 +23,13 @@ from altfusion.systems.xu2016 import OUTPUT_INTERVAL, SENSORS
 ROOT = Path(__file__).resolve().parents[1]
 MODELS = ROOT / "models"
 RUNS = 2
-WORKERS = 2
 LASER_SIGMA = SENSORS["laser"]["noise_std"]
 
 
 @pytest.fixture(scope="module")
-def xu(fmus, tmp_path_factory):
+def xu(reproduce_cli, tmp_path_factory):
     out = tmp_path_factory.mktemp("xu2016")
-    completed = subprocess.run(
-        [sys.executable, "-m", "altfusion.cli", "reproduce", "xu2016", "-n", str(RUNS),
-         "--workers", str(WORKERS), "--models", str(MODELS), "--out", str(out)],
-        capture_output=True, text=True, timeout=600, cwd=ROOT)
-    assert completed.returncode == 0, completed.stderr[-3000:]
-    return out, completed.stdout, xu2016.analyse(out)
+    return out, reproduce_cli("xu2016", RUNS, out), xu2016.analyse(out)
 
 
 def test_xu_reproduction_writes_the_figures_and_the_tables(xu):

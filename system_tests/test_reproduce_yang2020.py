@@ -6,8 +6,6 @@ Each statistical assertion states its tolerance and where it comes from; the num
 full reproduction are in the README ("Paper reproduction: seed 003 (Yang et al.)").
 """
 
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -22,19 +20,13 @@ from altfusion.reproduce.common import REFERENCE_FOLDER, reference_differences
 ROOT = Path(__file__).resolve().parents[1]
 MODELS = ROOT / "models"
 RUNS = 4
-WORKERS = 2
 
 
 @pytest.fixture(scope="module")
-def yang(fmus, tmp_path_factory):
+def yang(reproduce_cli, tmp_path_factory):
     """``altfusion reproduce yang2020 -n RUNS`` in a subprocess: (out, stdout, analysis)."""
     out = tmp_path_factory.mktemp("yang2020")
-    completed = subprocess.run(
-        [sys.executable, "-m", "altfusion.cli", "reproduce", "yang2020", "-n", str(RUNS),
-         "--workers", str(WORKERS), "--models", str(MODELS), "--out", str(out)],
-        capture_output=True, text=True, timeout=600, cwd=ROOT)
-    assert completed.returncode == 0, completed.stderr[-3000:]
-    return out, completed.stdout, yang2020.analyse(out)
+    return out, reproduce_cli("yang2020", RUNS, out), yang2020.analyse(out)
 
 
 def test_yang_reproduction_writes_fig2_and_the_tables(yang):

@@ -32,13 +32,11 @@ GPS heights (Fig. 7), its heights corrected with the best constant R and the ada
 (the tables printed at the end).
 """
 
-import sys
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from altfusion.montecarlo.source import CampaignError
 from altfusion.montecarlo.statistics import mean_interval
 from altfusion.reproduce import ReproduceOptions
 from altfusion.reproduce.common import (
@@ -55,7 +53,7 @@ from altfusion.reproduce.common import (
     paired_wins,
     rms_curve,
     rms_over_runs,
-    run_campaigns,
+    run_reproduction,
     save_figure,
 )
 from altfusion.systems.bao2017 import DRIFT_PSD, GOOD_WINDOW, POOR_WINDOW, STOP_TIME
@@ -314,20 +312,6 @@ def plot_fig8(analysis: BaoAnalysis, path: Path) -> Path:
 
 def reproduce(options: ReproduceOptions) -> int:
     """Run (or complete) the campaigns, write the figure and the tables, print them."""
-    status = run_campaigns(CAMPAIGNS, options, DEFAULT_RUNS)
-    if status:
-        return status
-    out = Path(options.out)
-    try:
-        analysis = analyse(out)
-    except (CampaignError, ValueError) as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
-    text = format_tables(analysis)
-    table = out / "bao2017.md"
-    table.write_text(text)
-    figure_path = plot_fig8(analysis, out / "bao2017_fig8.png")
-    print(text)
-    print(f"wrote {figure_path}\nwrote {table}\ncampaigns: "
-          + ", ".join(str(out / c.folder) for c in CAMPAIGNS) + " (altfusion report DIR)")
-    return 0
+    return run_reproduction(options, "bao2017", CAMPAIGNS, DEFAULT_RUNS, analyse,
+                            format_tables,
+                            lambda a, out: [plot_fig8(a, out / "bao2017_fig8.png")])

@@ -20,6 +20,7 @@ intended change of a scenario or a model (then review the diff)::
 
 import argparse
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -281,6 +282,37 @@ def markdown_table(header: tuple[str, ...], rows: list[tuple[str, ...]]) -> str:
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     lines += ["| " + " | ".join(row) + " |" for row in rows]
     return "\n".join(lines)
+
+
+# ------------------------------------------------------------------------------ command
+
+
+def run_reproduction(options: ReproduceOptions, name: str, campaigns: tuple[Campaign, ...],
+                     default_runs: int, analyse: Callable[[Path], Any],
+                     tables: Callable[[Any], str],
+                     figures: Callable[[Any, Path], list[Path]]) -> int:
+    """What ``altfusion reproduce NAME`` does: run (or complete) the campaigns, analyse them
+    (``analyse(out)``), write the figures (``figures(analysis, out)``) and the tables
+    (``tables(analysis)``, to ``<name>.md``), print them; the exit status (2 when the
+    campaigns cannot be analysed: the message is printed)."""
+    status = run_campaigns(campaigns, options, default_runs)
+    if status:
+        return status
+    out = Path(options.out)
+    try:
+        analysis = analyse(out)
+    except (CampaignError, ValueError) as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+    text = tables(analysis)
+    table = out / f"{name}.md"
+    table.write_text(text)
+    paths = figures(analysis, out)
+    print(text)
+    print("\n".join(f"wrote {path}" for path in [*paths, table]))
+    print("campaigns: " + ", ".join(str(out / c.folder) for c in campaigns)
+          + " (altfusion report DIR)")
+    return 0
 
 
 # ------------------------------------------------------------------------------ references

@@ -24,14 +24,12 @@ and the non-adaptive fusion of run 0 with the RMS over runs; Figs. 2-4), ``hajiy
 factor S(k)) and ``hajiyev.md`` (the table printed at the end).
 """
 
-import sys
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 from scipy import stats
 
-from altfusion.montecarlo.source import CampaignError
 from altfusion.montecarlo.statistics import Interval, mean_interval
 from altfusion.reproduce import ReproduceOptions
 from altfusion.reproduce.common import (
@@ -43,7 +41,7 @@ from altfusion.reproduce.common import (
     figure,
     load_runs,
     markdown_table,
-    run_campaigns,
+    run_reproduction,
     save_figure,
 )
 from altfusion.systems.hajiyev import R_BARO, R_GPS
@@ -341,21 +339,5 @@ def plot_figures(analysis: HajiyevAnalysis, out: Path) -> list[Path]:
 
 def reproduce(options: ReproduceOptions) -> int:
     """Run (or complete) the campaigns, write the figures and the table, print it."""
-    status = run_campaigns(CAMPAIGNS, options, DEFAULT_RUNS)
-    if status:
-        return status
-    out = Path(options.out)
-    try:
-        analysis = analyse(out)
-    except (CampaignError, ValueError) as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
-    text = format_table(analysis)
-    table = out / "hajiyev.md"
-    table.write_text(text)
-    figures = plot_figures(analysis, out)
-    print(text)
-    print("\n".join(f"wrote {path}" for path in [*figures, table]))
-    print("campaigns: " + ", ".join(str(out / c.folder) for c in CAMPAIGNS)
-          + " (altfusion report DIR)")
-    return 0
+    return run_reproduction(options, "hajiyev", CAMPAIGNS, DEFAULT_RUNS, analyse,
+                            format_table, plot_figures)

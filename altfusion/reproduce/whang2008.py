@@ -26,13 +26,11 @@ checks that, and how the final height compares with the compensated height and w
 baro-height once the weather has drifted.
 """
 
-import sys
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from altfusion.montecarlo.source import CampaignError
 from altfusion.reproduce import ReproduceOptions
 from altfusion.reproduce.common import (
     Campaign,
@@ -44,7 +42,7 @@ from altfusion.reproduce.common import (
     markdown_table,
     rms_curve,
     rms_over_runs,
-    run_campaigns,
+    run_reproduction,
     save_figure,
 )
 from altfusion.systems.whang2008 import GPS_PERIOD, STOP_TIME
@@ -263,20 +261,6 @@ def plot_fig3(analysis: WhangAnalysis, path: Path) -> Path:
 
 def reproduce(options: ReproduceOptions) -> int:
     """Run (or complete) the campaigns, write the figure and the tables, print them."""
-    status = run_campaigns(CAMPAIGNS, options, DEFAULT_RUNS)
-    if status:
-        return status
-    out = Path(options.out)
-    try:
-        analysis = analyse(out)
-    except (CampaignError, ValueError) as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
-    text = format_tables(analysis)
-    table = out / "whang2008.md"
-    table.write_text(text)
-    figure = plot_fig3(analysis, out / "whang2008_fig3.png")
-    print(text)
-    print(f"wrote {figure}\nwrote {table}\ncampaigns: "
-          + ", ".join(str(out / c.folder) for c in CAMPAIGNS) + " (altfusion report DIR)")
-    return 0
+    return run_reproduction(options, "whang2008", CAMPAIGNS, DEFAULT_RUNS, analyse,
+                            format_tables,
+                            lambda a, out: [plot_fig3(a, out / "whang2008_fig3.png")])

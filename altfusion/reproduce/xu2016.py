@@ -30,13 +30,11 @@ and the RMS versus time of both multipoint flights, with the bounds) and ``xu201
 tables printed at the end).
 """
 
-import sys
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from altfusion.montecarlo.source import CampaignError
 from altfusion.montecarlo.statistics import mean_interval
 from altfusion.reproduce import ReproduceOptions
 from altfusion.reproduce.common import (
@@ -51,7 +49,7 @@ from altfusion.reproduce.common import (
     percentile_over_runs,
     rms_curve,
     rms_over_runs,
-    run_campaigns,
+    run_reproduction,
     save_figure,
 )
 from altfusion.systems.catalog import build_system
@@ -375,26 +373,7 @@ def plot_figures(analysis: XuAnalysis, out: Path) -> list[Path]:
 # ------------------------------------------------------------------------------ command
 
 
-def report(out: Path) -> int:
-    """Analyse the campaigns in ``out``, write the figures and the tables, print them."""
-    out = Path(out)
-    try:
-        analysis = analyse(out)
-    except (CampaignError, ValueError) as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
-    text = format_tables(analysis)
-    table = out / "xu2016.md"
-    table.write_text(text)
-    figures = plot_figures(analysis, out)
-    print(text)
-    print("\n".join(f"wrote {path}" for path in [*figures, table]))
-    print("campaigns: " + ", ".join(str(out / c.folder) for c in CAMPAIGNS)
-          + " (altfusion report DIR)")
-    return 0
-
-
 def reproduce(options: ReproduceOptions) -> int:
-    """Run (or complete) the campaigns, then :func:`report`."""
-    status = run_campaigns(CAMPAIGNS, options, DEFAULT_RUNS)
-    return status or report(options.out)
+    """Run (or complete) the campaigns, write the figures and the tables, print them."""
+    return run_reproduction(options, "xu2016", CAMPAIGNS, DEFAULT_RUNS, analyse,
+                            format_tables, plot_figures)

@@ -32,13 +32,11 @@ above the RMS over runs versus time, 95 % chi-square bands) and ``yang2020.md`` 
 printed at the end).
 """
 
-import sys
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from altfusion.montecarlo.source import CampaignError
 from altfusion.montecarlo.statistics import Interval, rms_chi2_bounds
 from altfusion.reproduce import ReproduceOptions
 from altfusion.reproduce.common import (
@@ -52,7 +50,7 @@ from altfusion.reproduce.common import (
     markdown_table,
     rms_curve,
     rms_over_runs,
-    run_campaigns,
+    run_reproduction,
     save_figure,
 )
 from altfusion.systems.sensors import SEED_003_SENSORS
@@ -322,27 +320,16 @@ def plot_errors(a: YangAnalysis, path: Path) -> Path:
     return save_figure(fig, path)
 
 
+def plot_figures(a: YangAnalysis, out: Path) -> list[Path]:
+    """Fig. 2's equivalent and the error curves."""
+    return [plot_fig2(a, out / "yang2020_fig2.png"), plot_errors(a, out / "yang2020_errors.png")]
+
+
 # ------------------------------------------------------------------------------ command
 
 
 def reproduce(options: ReproduceOptions) -> int:
     """Run (or complete) the campaigns, write the figures and the tables, print them."""
-    status = run_campaigns(CAMPAIGNS, options, DEFAULT_RUNS)
-    if status:
-        return status
-    out = Path(options.out)
-    try:
-        analysis = analyse(out)
-    except (CampaignError, ValueError) as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
-    text = format_tables(analysis)
-    table = out / "yang2020.md"
-    table.write_text(text)
-    figures = [plot_fig2(analysis, out / "yang2020_fig2.png"),
-               plot_errors(analysis, out / "yang2020_errors.png")]
-    print(text)
-    print("\n".join(f"wrote {path}" for path in [*figures, table]))
-    print("campaigns: " + ", ".join(str(out / c.folder) for c in CAMPAIGNS)
-          + " (altfusion report DIR)")
-    return 0
+    return run_reproduction(options, "yang2020", CAMPAIGNS, DEFAULT_RUNS, analyse,
+                            format_tables, plot_figures)
+
