@@ -39,6 +39,14 @@ from altfusion.version import CORE_VERSION
 FMI_TYPES = ("Real", "Integer", "Boolean")
 _C_TYPES = {"Real": fmi2Real, "Integer": fmi2Integer, "Boolean": fmi2Boolean}
 PY_TYPES = {"Real": float, "Integer": int, "Boolean": bool, "String": str}
+_GET_SET = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_size_t,
+                            ctypes.c_void_p)
+"""fmi2Get*/fmi2Set*(component, value references, count, values) on addresses."""
+
+
+def _address(array: ctypes.Array) -> ctypes.c_void_p:
+    """A pointer to ``array`` that keeps it alive (``cast`` holds a reference to it)."""
+    return ctypes.cast(array, ctypes.c_void_p)
 
 
 class CosimError(RuntimeError):
@@ -233,6 +241,7 @@ class FmuInstance:
         self.fmu = FMU2Slave(guid=info.guid, unzipDirectory=folder,
                              modelIdentifier=info.model_name, instanceName=self.instance_name)
         self.fmu.instantiate(callbacks=router.callbacks, loggingOn=True)
+        self._component = ctypes.c_void_p(self.fmu.component)
         _track_library(info.path, self.fmu)
 
     def errors(self) -> list[str]:
@@ -267,32 +276,40 @@ class FmuInstance:
         if self.messages:
             self._raise_logged_errors(what)
 
+    def _raw_get_set(self, name: str):
+        """fmi2Get*/fmi2Set* called with plain addresses: fmpy's prototypes convert each
+        array argument through ``from_param`` at every call (the buffers of the fast paths
+        live as long as their closures)."""
+        return _GET_SET(ctypes.cast(getattr(self.fmu.dll, name), ctypes.c_void_p).value)
+
     def reader(self, kind: str, vrs: list[int]):
-        """A function returning the current values of ``vrs`` (a reused ctypes buffer)."""
-        function = self.fmu._functions[f"fmi2Get{kind}"]
-        c_type = _C_TYPES[kind]
+        """A function reading the current values of ``vrs`` into a reused ctypes buffer (and
+        returning it), and that buffer."""
+        function = self._raw_get_set(f"fmi2Get{kind}")
         refs = (fmi2ValueReference * len(vrs))(*vrs)
-        buffer = (c_type * len(vrs))()
-        component, count, check = self.fmu.component, len(vrs), self._check_status
+        buffer = (_C_TYPES[kind] * len(vrs))()
+        component, count, check = self._component, len(vrs), self._check_status
+        refs_address, buffer_address = _address(refs), _address(buffer)
 
         def read():
-            status = function(component, refs, count, buffer)
+            status = function(component, refs_address, count, buffer_address)
             if status or self.messages:
                 check(status, f"get{kind}")
             return buffer
 
-        return read
+        return read, buffer
 
     def writer(self, kind: str, vrs: list[int]):
         """A function setting ``vrs`` to a sequence of values (reused ctypes buffers)."""
-        function = self.fmu._functions[f"fmi2Set{kind}"]
+        function = self._raw_get_set(f"fmi2Set{kind}")
         refs = (fmi2ValueReference * len(vrs))(*vrs)
         buffer = (_C_TYPES[kind] * len(vrs))()
-        component, count, check = self.fmu.component, len(vrs), self._check_status
+        component, count, check = self._component, len(vrs), self._check_status
+        refs_address, buffer_address = _address(refs), _address(buffer)
 
         def write(values):
             buffer[:] = values
-            status = function(component, refs, count, buffer)
+            status = function(component, refs_address, count, buffer_address)
             if status or self.messages:
                 check(status, f"set{kind}")
 
@@ -401,8 +418,16 @@ class CoreInstance:
             setattr(self.core, self._by_ref[vr].name, PY_TYPES[kind](value))
 
     def reader(self, kind: str, vrs: list[int]):
+        """Like :meth:`FmuInstance.reader`; the buffer is a list."""
         names = [self._by_ref[vr].name for vr in vrs]
-        return lambda: [getattr(self.core, name) for name in names]
+        buffer: list[Any] = [None] * len(names)
+
+        def read():
+            core = self.core
+            buffer[:] = [getattr(core, name) for name in names]
+            return buffer
+
+        return read, buffer
 
     def writer(self, kind: str, vrs: list[int]):
         names = [self._by_ref[vr].name for vr in vrs]

@@ -67,46 +67,60 @@ class _Stepped:
     parameters: dict[str, Any]
     output_names: dict[str, list[str]] = field(default_factory=dict)
     output_vrs: dict[str, list[int]] = field(default_factory=dict)
+    linked_kinds: set[str] = field(default_factory=set)
+    """Output types some connection reads (the others are only recorded)."""
     outputs: dict[str, Any] = field(default_factory=dict)
     feedthrough: list[tuple[str, int, _Link]] = field(default_factory=list)
     delayed: list[tuple[str, int, _Link]] = field(default_factory=list)
-    latched: list[Any] = field(default_factory=list)
 
-    def prepare(self) -> None:
-        """Build the batched readers and writers: one get and one set call per type."""
-        self._readers = [(kind, self.instance.reader(kind, vrs))
-                         for kind, vrs in self.output_vrs.items() if vrs]
-        inputs: dict[str, list[tuple[int, int | None, _Link]]] = {}
-        for position, (kind, vr, link) in enumerate(self.delayed):
-            inputs.setdefault(kind, []).append((vr, position, link))
+    def prepare_outputs(self) -> None:
+        """Build the batched readers, one get call per type. Each reader fills one buffer
+        that stays the same object, so the sources of inputs, latches and recordings are
+        (buffer, slot) pairs resolved once."""
+        self._linked_reads, self._recorded_reads = [], []
+        for kind, vrs in self.output_vrs.items():
+            read, self.outputs[kind] = self.instance.reader(kind, vrs)
+            (self._linked_reads if kind in self.linked_kinds else self._recorded_reads).append(read)
+
+    def prepare_inputs(self) -> None:
+        """Build the batched writers (one set call per type), once every source's outputs are
+        prepared, and the stepping function."""
+        self._latch_sources = [link.source.source(link) for _, _, link in self.delayed]
+        self._latched = [None] * len(self.delayed)
+        inputs: dict[str, list[tuple[int, tuple[Any, int]]]] = {}
+        for position, (kind, vr, _link) in enumerate(self.delayed):
+            inputs.setdefault(kind, []).append((vr, (self._latched, position)))
         for kind, vr, link in self.feedthrough:
-            inputs.setdefault(kind, []).append((vr, None, link))
-        self._writers = [
-            (self.instance.writer(kind, [vr for vr, _, _ in entries]),
-             [(position, link.source.outputs, link.kind, link.slot)
-              for _, position, link in entries])
-            for kind, entries in inputs.items()
-        ]
+            inputs.setdefault(kind, []).append((vr, link.source.source(link)))
+        self._writers = [(self.instance.writer(kind, [vr for vr, _ in entries]),
+                          [source for _, source in entries])
+                         for kind, entries in inputs.items()]
         self.step = self.instance.stepper()
 
-    def refresh_outputs(self) -> None:
-        for kind, read in self._readers:
-            self.outputs[kind] = read()
+    def source(self, link: _Link) -> tuple[Any, int]:
+        """The (buffer, slot) holding the output a link reads."""
+        return self.outputs[link.kind], link.slot
 
-    def value(self, kind: str, slot: int) -> Any:
-        return self.outputs[kind][slot]
+    def refresh_outputs(self) -> None:
+        """Read the outputs other components use (every step of this component)."""
+        for read in self._linked_reads:
+            read()
+
+    def refresh_recorded(self) -> None:
+        """Read the outputs that are only recorded (at output ticks)."""
+        for read in self._recorded_reads:
+            read()
 
     def latch(self) -> None:
-        self.latched = [link.source.value(link.kind, link.slot) for _, _, link in self.delayed]
+        self._latched[:] = [buffer[slot] for buffer, slot in self._latch_sources]
 
     def apply_inputs(self) -> None:
         """Set the inputs, one call per type; a type whose values are all unchanged since
         the last call is not set again (an FMU keeps its inputs: fmi2Set* is only needed for
         a change, and sample-held sensor signals change at their own rate)."""
-        latched, written = self.latched, self._written
+        written = self._written
         for index, (write, sources) in enumerate(self._writers):
-            values = [latched[position] if position is not None else outputs[kind][slot]
-                      for position, outputs, kind, slot in sources]
+            values = [buffer[slot] for buffer, slot in sources]
             if values != written[index]:
                 write(values)
                 written[index] = values
@@ -147,7 +161,11 @@ class Simulation:
             if master == "jacobi":
                 self._latch_every_input()
             for component in self._components:
-                component.prepare()
+                component.prepare_outputs()
+            for component in self._components:
+                component.prepare_inputs()
+            self._record_sources = [(stepped.outputs[kind], slot) for _, stepped, kind, slot, _
+                                    in self._recorded]
         except Exception:
             self.close()
             raise
@@ -212,6 +230,7 @@ class Simulation:
                 raise CosimError(f"cannot connect {kind} '{connection.start}' to {var.type} "
                                  f"'{connection.end}'")
             link = _Link(source, kind, slot, connection.end)
+            source.linked_kinds.add(kind)
             entry = (var.type, var.value_reference, link)
             if var.name in target.instance.info.feedthrough_inputs:
                 target.feedthrough.append(entry)
@@ -270,22 +289,27 @@ class Simulation:
         times = np.empty(rows)
         self._record(data, times, 0, 0)
         tick_time = self.base.time
-        latching = [c for c in self._components if c.delayed]
+        latching = [(c.ratio, c.latch) for c in self._components if c.delayed]
+        stepping = [(c.ratio, c.apply_inputs, c.step, c.refresh_outputs) for c in self._order]
+        recorded_only = [c.refresh_recorded for c in self._components if c._recorded_reads]
+        t_previous = tick_time(0)
         for n in range(steps):
-            for component in latching:
-                if n % component.ratio == 0:
-                    component.latch()
+            for ratio, latch in latching:
+                if n % ratio == 0:
+                    latch()
             end = n + 1
             t_end = tick_time(end)
-            for component in self._order:
-                ratio = component.ratio
+            for ratio, apply_inputs, step, refresh_outputs in stepping:
                 if end % ratio:
                     continue
-                component.apply_inputs()
-                t_start = tick_time(end - ratio)
-                component.step(t_start, t_end - t_start)
-                component.refresh_outputs()
+                apply_inputs()
+                t_start = t_previous if ratio == 1 else tick_time(end - ratio)
+                step(t_start, t_end - t_start)
+                refresh_outputs()
+            t_previous = t_end
             if end % every == 0:
+                for refresh_recorded in recorded_only:
+                    refresh_recorded()
                 self._record(data, times, end // every, end)
         for component in self._components:
             component.instance.terminate()
@@ -313,6 +337,7 @@ class Simulation:
         for component in self._components:
             component.forget_inputs()
             component.refresh_outputs()
+            component.refresh_recorded()
         # Upstream first: each component ends initialization with its inputs set from the
         # final initial outputs of its feedthrough sources.
         for component in self._order:
@@ -325,7 +350,7 @@ class Simulation:
 
     def _record(self, data: np.ndarray, times: np.ndarray, row: int, tick: int) -> None:
         times[row] = self.base.time(tick)
-        data[row] = [stepped.value(kind, slot) for _, stepped, kind, slot, _ in self._recorded]
+        data[row] = [buffer[slot] for buffer, slot in self._record_sources]
 
     def close(self) -> None:
         """Free every FMU instance."""
