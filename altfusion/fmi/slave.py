@@ -35,6 +35,7 @@ import sys
 import traceback
 import uuid
 from dataclasses import replace
+from operator import attrgetter
 from typing import Any, ClassVar
 from xml.etree.ElementTree import Element, SubElement
 
@@ -62,6 +63,10 @@ STEP_SIZE = ParamInfo(
 )
 
 _FMI_TYPES = {float: Real, int: Integer, bool: Boolean, str: String}
+_PY_TYPES = {fmi: python for python, fmi in _FMI_TYPES.items()}
+
+MAX_CACHED_BATCHES = 256
+"""Accessors kept per instance for distinct lists of value references (then made anew)."""
 
 _PINNED_MODULE_DICTS: list[dict[str, Any]] = []
 """One reference per execution of a slave script (see the module docstring)."""
@@ -120,6 +125,8 @@ class CoreSlave(Fmi2Slave):
         self._getters, self._setters = {}, {}
         for kind in _FMI_TYPES.values():
             self._getters[kind], self._setters[kind] = self._accessors(kind)
+        self._readers: dict[tuple[type, tuple[int, ...]], Any] = {}
+        self._writers: dict[tuple[type, tuple[int, ...]], Any] = {}
 
     # ----------------------------------------------------------------- declarations
     @classmethod
@@ -224,45 +231,97 @@ class CoreSlave(Fmi2Slave):
         return ({vr: v.getter for vr, v in typed.items()},
                 {vr: v.setter for vr, v in typed.items() if v.setter is not None})
 
-    def _get(self, label: str, getters: dict[int, Any], convert, vrs, fallback) -> list:
+    def _batch(self, cache: dict, build, kind: type, vrs) -> Any:
+        """The accessor of the value references ``vrs`` (made once per list of them: an
+        importer asks for the same lists at every step)."""
+        key = (kind, tuple(vrs))
+        batch = cache.get(key)
+        if batch is None:
+            if len(cache) >= MAX_CACHED_BATCHES:
+                cache.clear()
+            batch = cache[key] = build(kind, key[1])
+        return batch
+
+    def _core_names(self, kind: type, vrs: tuple[int, ...], inputs_only: bool) -> list | None:
+        """The core attribute names of ``vrs`` if all are inputs (or outputs), else None."""
+        declared = {v.name for v in self.variables
+                    if not inputs_only or isinstance(v, Input)}
+        names = [getattr(self.vars.get(vr), "name", None) for vr in vrs]
+        kinds_match = all(isinstance(self.vars.get(vr), kind) for vr in vrs)
+        return names if kinds_match and all(n in declared for n in names) else None
+
+    def _build_reader(self, kind: type, vrs: tuple[int, ...]):
+        """A function returning the values of ``vrs`` as a list of ``kind``'s Python type;
+        inputs and outputs are read straight from the core (no per-variable getter)."""
+        convert = _PY_TYPES[kind]
+        names = self._core_names(kind, vrs, inputs_only=False)
+        if names is None:
+            getters = [self._getters[kind][vr] for vr in vrs]        # KeyError: logged
+            return lambda: [convert(get()) for get in getters]
+        if len(names) == 1:
+            name = names[0]
+            return lambda: [convert(getattr(self.core, name))]
+        get_all = attrgetter(*names)
+        return lambda: list(map(convert, get_all(self.core)))
+
+    def _build_writer(self, kind: type, vrs: tuple[int, ...]):
+        """A function setting ``vrs`` to a sequence of values; inputs are set straight on the
+        core (parameters through their setters, which check them)."""
+        names = self._core_names(kind, vrs, inputs_only=True)
+        if names is None:
+            setters = [self._setters[kind][vr] for vr in vrs]        # KeyError: logged
+
+            def write(values) -> None:
+                for set_value, value in zip(setters, values, strict=True):
+                    set_value(value)
+            return write
+        convert = _PY_TYPES[kind]
+
+        def write_inputs(values) -> None:
+            core = self.core
+            for name, value in zip(names, values, strict=True):
+                setattr(core, name, convert(value))
+            self._stale = self._initializing
+        return write_inputs
+
+    def _get(self, label: str, kind: type, vrs, fallback) -> list:
         if self._initializing and self._stale:
             self._refresh_initial_outputs()
         try:
-            return [convert(getters[vr]()) for vr in vrs]
+            return self._batch(self._readers, self._build_reader, kind, vrs)()
         except Exception:
             self._log_exception(label)
             return [fallback] * len(vrs)
 
-    def _set(self, label: str, setters: dict[int, Any], vrs, values) -> None:
+    def _set(self, label: str, kind: type, vrs, values) -> None:
         try:
-            for vr, value in zip(vrs, values, strict=True):
-                setters[vr](value)
+            self._batch(self._writers, self._build_writer, kind, vrs)(values)
         except Exception:
             self._log_exception(label)
 
     def get_real(self, vrs):
-        return self._get("getReal", self._getters[Real], float, vrs, float("nan"))
+        return self._get("getReal", Real, vrs, float("nan"))
 
     def get_integer(self, vrs):
-        return self._get("getInteger", self._getters[Integer], int, vrs, 0)
+        return self._get("getInteger", Integer, vrs, 0)
 
     def get_boolean(self, vrs):
-        return self._get("getBoolean", self._getters[Boolean], bool, vrs, False)
+        return self._get("getBoolean", Boolean, vrs, False)
 
     def get_string(self, vrs):
-        return self._get("getString", self._getters[String], str, vrs, "")
+        return self._get("getString", String, vrs, "")
 
     def set_real(self, vrs, values):
-        self._set("setReal", self._setters[Real], vrs, values)
+        self._set("setReal", Real, vrs, values)
 
     def set_integer(self, vrs, values):
-        self._set("setInteger", self._setters[Integer], vrs, values)
+        self._set("setInteger", Integer, vrs, values)
 
     def set_boolean(self, vrs, values):
-        self._set("setBoolean", self._setters[Boolean], vrs, values)
+        self._set("setBoolean", Boolean, vrs, values)
 
     def set_string(self, vrs, values):
-        self._set("setString", self._setters[String], vrs, values)
+        self._set("setString", String, vrs, values)
 
     # ----------------------------------------------------------------- FMU state
     def _get_fmu_state(self) -> dict[str, Any]:
