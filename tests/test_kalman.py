@@ -5,7 +5,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from altfusion.estimators.kalman import predict, scalar_gate, update
+from altfusion.estimators.kalman import predict, scalar_gate, update, update_components
 
 positive = st.floats(min_value=1e-3, max_value=1e4)
 
@@ -36,6 +36,24 @@ def test_vector_update_keeps_p_symmetric_positive_definite():
     assert np.array_equal(result.P, result.P.T)
     assert np.all(np.linalg.eigvalsh(result.P) > 0)
     assert result.nis == pytest.approx(4.0 / ((H @ P @ H.T)[0, 0] + 0.5))
+
+
+def test_component_update_is_the_general_update_bit_for_bit():
+    """update_components replaces the products by H = rows of I with indexing; it must give
+    the very same floats as update(), for one and several measured components."""
+    rng = np.random.default_rng(7)
+    for _ in range(500):
+        n = int(rng.integers(1, 6))
+        A = rng.standard_normal((n, n)) * 10 ** rng.uniform(-3, 3)
+        P, x = A @ A.T + 1e-3 * np.eye(n), 100 * rng.standard_normal(n)
+        for k in range(1, n + 1):
+            rows = tuple(sorted(rng.choice(n, k, replace=False).tolist()))
+            z = (100 * rng.standard_normal(k)).tolist()
+            variances = (10 ** rng.uniform(-4, 3, k)).tolist()
+            fast = update_components(x, P, rows, z, variances)
+            general = update(x, P, np.array(z), np.eye(n)[list(rows)], np.diag(variances))
+            for field in fast._fields:
+                assert np.array_equal(getattr(fast, field), getattr(general, field)), field
 
 
 def test_predict_propagates_mean_and_covariance():

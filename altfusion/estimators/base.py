@@ -155,8 +155,8 @@ class Estimator(Component):
         if stream.valid and not getattr(self, stream.valid):
             return None
         sample = {name: float(getattr(self, name)) for name in stream.values}
-        bad = {name: value for name, value in sample.items() if not math.isfinite(value)}
-        if bad:
+        if not all(map(math.isfinite, sample.values())):
+            bad = {name: value for name, value in sample.items() if not math.isfinite(value)}
             self.n_ignored += 1
             self.note(f"{stream.prefix}: non-finite sample ignored {bad}")
             return None

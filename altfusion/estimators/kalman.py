@@ -5,6 +5,7 @@ keeps P symmetric positive semi-definite for any gain, followed by explicit symm
 All arrays are float numpy arrays; a scalar measurement has H of shape (1, n) and R (1, 1).
 """
 
+from collections.abc import Sequence
 from functools import cache
 from typing import NamedTuple
 
@@ -69,6 +70,37 @@ def update(x: np.ndarray, P: np.ndarray, z: np.ndarray | float, H: np.ndarray,
         K = gain_scale * np.linalg.solve(S, HP).T
     I_KH = _identity(len(x)) - K @ H
     P_new = symmetrize(I_KH @ P @ I_KH.T + K @ R @ K.T)
+    return Update(x + K @ y, P_new, y, S, K)
+
+
+def update_components(x: np.ndarray, P: np.ndarray, indices: tuple[int, ...],
+                      z: Sequence[float], variances: Sequence[float]) -> Update:
+    """:func:`update` for independent direct measurements of state components: z_j measures
+    x[indices[j]] with variance variances[j], i.e. H = rows ``indices`` of I, R = diag.
+
+    The same arithmetic as ``update(x, P, z, I[indices], diag(variances))``, bit for bit,
+    without the products by H and R: a product by a row of I only selects (every other term
+    of its sums is exactly ±0), so H x, H P Hᵀ, K H and K R are indexing and scaling; the
+    products with real sums (P of the Joseph form, K y, (K R) Kᵀ) stay matrix products.
+    """
+    I_KH = _identity(len(x)).copy()
+    if len(indices) == 1:            # a scalar S: no symmetrization, no LAPACK (a hot path)
+        row = indices[0]
+        y = np.array([z[0] - x.item(row)])
+        s = P.item(row, row) + variances[0]
+        S = np.array([[s]])
+        K = (1.0 / s) * P[row:row + 1].T
+        I_KH[:, row] -= K[:, 0]
+        KR = K * variances[0]
+    else:
+        rows = list(indices)
+        HP = P[rows]
+        y = np.array(z) - x[rows]
+        S = symmetrize(HP[:, rows] + np.diag(variances))
+        K = np.linalg.solve(S, HP).T
+        I_KH[:, rows] -= K
+        KR = np.multiply(K, variances, order="C")
+    P_new = symmetrize(I_KH @ P @ I_KH.T + KR @ K.T)
     return Update(x + K @ y, P_new, y, S, K)
 
 

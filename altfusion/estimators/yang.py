@@ -45,15 +45,13 @@ by eq. (15).
 import math
 from collections import deque
 from dataclasses import dataclass
-from functools import cache
 
 import numpy as np
 
 from altfusion.estimators.base import ACC, BARO_TIMED, GPS_VZ_TIMED, RADAR_TIMED, Estimator
-from altfusion.estimators.kalman import predict, scalar_gate, update
+from altfusion.estimators.kalman import predict, scalar_gate, update_components
 from altfusion.params import param
 
-IDENTITY = np.eye(3)
 HEIGHT_SENSORS = ("radar", "gps", "baro")
 """The height sensors in benchmark order: largest sampling period first (Section 4.2)."""
 
@@ -62,14 +60,6 @@ HEIGHT_STREAMS = (("baro", BARO_TIMED, "baro_h", "baro_time"),
                   ("gps", GPS_VZ_TIMED, "gps_h", "gps_time"),
                   ("radar", RADAR_TIMED, "radar_h", "radar_time"))
 """Each height sensor's stream, height input and time-stamp input."""
-
-
-@cache
-def measurement_matrix(rows: tuple[int, ...]) -> np.ndarray:
-    """The rows of H = I (eq. 12) for the measurements of a step (read only, made once)."""
-    H = IDENTITY[list(rows)]
-    H.flags.writeable = False
-    return H
 
 
 def unify_time(history, t_b: float) -> float:
@@ -156,25 +146,26 @@ class YangFusionKF(Estimator):
             self._model = transition(dt), white_jerk_noise(dt, self.params.jerk_psd)
             self._model_dt = dt
         self.x, self.P = predict(self.x, self.P, *self._model)
-        self._publish()
 
     def fuse_samples(self, samples) -> None:
-        """Gate and store the new heights, fuse at a benchmark sample, then one KF update."""
+        """Gate and store the new heights, fuse at a benchmark sample, then one KF update
+        (which also publishes the time update of :meth:`propagate`)."""
+        now, p = self.time, self.params
         arrived = set()
         for name, stream, value, stamp in HEIGHT_STREAMS:
             sample = samples.get(stream)
             if sample is None:
                 continue
-            z = sample[value] + (self.params.terrain_h if name == "radar" else 0.0)   # (6)
-            if sample[stamp] < self.time - self.params.max_sample_age and name not in self._stale:
+            z = sample[value] + (p.terrain_h if name == "radar" else 0.0)             # (6)
+            if sample[stamp] < now - p.max_sample_age and name not in self._stale:
                 self._stale.add(name)
                 self.note(f"{name}: sample stamped {sample[stamp]!r} s arrives older than "
                           f"max_sample_age; it cannot take part in a fusion (is {stamp} set?)")
-            if self._gate(name, z):
+            if self._gate(name, stream, z):
                 self.history[name].append((sample[stamp], z))
                 arrived.add(name)
-        measurements = []                                   # (row of H = I, value, variance)
-        benchmark = self._benchmark()
+        measurements = []                   # (state component measured, value, variance)
+        benchmark = self._benchmark(now)
         if benchmark in arrived:
             self._fuse_heights(self.history[benchmark][-1][0])
             if self.started:
@@ -183,32 +174,29 @@ class YangFusionKF(Estimator):
                 self._start()
         gps = samples.get(GPS_VZ_TIMED)
         if gps is not None:
-            measurements.append((1, gps["gps_vz"], self.params.R_gps_vz))
+            measurements.append((1, gps["gps_vz"], p.R_gps_vz))
         acc = samples.get(ACC)
         if acc is not None:
-            measurements.append((2, acc["acc_z"], self.params.R_acc))
-        if measurements:
+            measurements.append((2, acc["acc_z"], p.R_acc))
+        if measurements:                                              # (12)-(14), H = I
             rows, z, R = zip(*measurements, strict=True)
-            result = update(self.x, self.P, np.array(z), measurement_matrix(rows),
-                            np.diag(R))                                        # (12)-(14)
+            result = update_components(self.x, self.P, rows, z, R)
             self.x, self.P = result.x, result.P
         self._publish()
 
-    def _gate(self, name: str, z: float) -> bool:
+    def _gate(self, name: str, stream, z: float) -> bool:
         """True if the height sample may enter the fusion (always before the filter starts)."""
         if not self.started:
             return True
-        innovation = z - float(self.x[0])
-        variance = float(self.P[0, 0]) + self.variances[name]
+        innovation = z - self.x.item(0)
+        variance = self.P.item(0, 0) + self.variances[name]
         if scalar_gate(innovation, variance, self.params.gate_sigma):
             return True
-        stream = {"baro": BARO_TIMED, "gps": GPS_VZ_TIMED, "radar": RADAR_TIMED}[name]
         self.reject(stream, innovation, math.sqrt(variance))
         return False
 
-    def _benchmark(self) -> str | None:
+    def _benchmark(self, now: float) -> str | None:
         """The first live height sensor in order of decreasing sampling period (Section 4.2)."""
-        now = self.time
         for name in HEIGHT_SENSORS:
             history = self.history[name]
             if history and history[-1][0] >= now - self.params.max_sample_age:
@@ -233,7 +221,7 @@ class YangFusionKF(Estimator):
 
     def _publish(self) -> None:
         self.h_est, self.vz_est, self.az_est = self.x.tolist()
-        self.h_std = math.sqrt(float(self.P[0, 0]))
+        self.h_std = math.sqrt(self.P.item(0, 0))
         self.weight_gps = self.weights["gps"]
         self.weight_baro = self.weights["baro"]
         self.weight_radar = self.weights["radar"]
