@@ -10,6 +10,7 @@ that exists is always valid. ``do_step`` checks the requested time against the t
 """
 
 from abc import ABC, abstractmethod
+from collections.abc import Sequence
 from typing import Any, ClassVar
 
 from altfusion.params import check_params
@@ -86,7 +87,9 @@ class Component(ABC):
             self.dropped_notes += 1
         self._notes.append(f"t = {self.time!r} s: {message}")
 
-    def take_notes(self) -> list[str]:
+    def take_notes(self) -> Sequence[str]:
         """The notes recorded since the last call (the FMU adapter logs them as warnings)."""
+        if not self._notes:
+            return ()                       # the usual case, at every step: nothing to hand
         notes, self._notes = self._notes, []
         return notes

@@ -29,6 +29,8 @@ class TickClock:
         self._step_num = step.numerator * (self._den // step.denominator)
         self._start_num = start.numerator * (self._den // start.denominator)
         self._step = step
+        self._step_tolerance = 1e-9 * self.step_size
+        self._time_tolerance = 1e-3 * self.step_size
         self.ticks = 0
 
     def time(self, ticks: int | None = None) -> float:
@@ -51,13 +53,13 @@ class TickClock:
 
     def advance(self, current_time: float, step_size: float) -> int:
         """Check a doStep(current_time, step_size) request and move one tick ahead."""
-        if abs(step_size - self.step_size) > 1e-9 * self.step_size:
+        if abs(step_size - self.step_size) > self._step_tolerance:
             raise StepError(
                 f"communication step {step_size!r} s differs from parameter "
                 f"step_size = {self.step_size!r} s"
             )
-        expected = self.time()
-        if abs(current_time - expected) > 1e-3 * self.step_size:
+        expected = (self._start_num + self.ticks * self._step_num) / self._den
+        if abs(current_time - expected) > self._time_tolerance:
             raise StepError(
                 f"doStep at t = {current_time!r} s, but this component is at t = {expected!r} s"
             )

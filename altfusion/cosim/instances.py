@@ -12,6 +12,7 @@ import importlib
 import itertools
 import os
 import zipfile
+from collections.abc import Sequence
 from ctypes import byref
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -82,7 +83,7 @@ MAX_WARNINGS = 10_000
 """Warnings kept per instance and run; later ones are counted, not kept."""
 
 
-def _keep_warnings(kept: list[str], new: list[str]) -> None:
+def _keep_warnings(kept: list[str], new: Sequence[str]) -> None:
     room = MAX_WARNINGS - len(kept)
     kept.extend(new[:max(room, 0)])
     if len(new) > room:
@@ -288,7 +289,7 @@ class FmuInstance:
         function = self._raw_get_set(f"fmi2Get{kind}")
         refs = (fmi2ValueReference * len(vrs))(*vrs)
         buffer = (_C_TYPES[kind] * len(vrs))()
-        component, count, check = self._component, len(vrs), self._check_status
+        component, count, check = self._component, ctypes.c_size_t(len(vrs)), self._check_status
         refs_address, buffer_address = _address(refs), _address(buffer)
 
         def read():
@@ -304,7 +305,7 @@ class FmuInstance:
         function = self._raw_get_set(f"fmi2Set{kind}")
         refs = (fmi2ValueReference * len(vrs))(*vrs)
         buffer = (_C_TYPES[kind] * len(vrs))()
-        component, count, check = self._component, len(vrs), self._check_status
+        component, count, check = self._component, ctypes.c_size_t(len(vrs)), self._check_status
         refs_address, buffer_address = _address(refs), _address(buffer)
 
         def write(values):

@@ -23,6 +23,7 @@ checked against (``altfusion.interop``): a feedthrough signal then arrives one b
 
 import graphlib
 from dataclasses import dataclass, field
+from operator import getitem
 from pathlib import Path
 from typing import Any
 
@@ -83,18 +84,23 @@ class _Stepped:
             (self._linked_reads if kind in self.linked_kinds else self._recorded_reads).append(read)
 
     def prepare_inputs(self) -> None:
-        """Build the batched writers (one set call per type), once every source's outputs are
-        prepared, and the stepping function."""
+        """Build the batched writers, once every source's outputs are prepared, and the
+        stepping function. Inputs are set in one call per type and source step: inputs from
+        sources of one rate change together, so a slow sensor's held values are not sent
+        again with a fast one's."""
         self._latch_sources = [link.source.source(link) for _, _, link in self.delayed]
         self._latched = [None] * len(self.delayed)
-        inputs: dict[str, list[tuple[int, tuple[Any, int]]]] = {}
-        for position, (kind, vr, _link) in enumerate(self.delayed):
-            inputs.setdefault(kind, []).append((vr, (self._latched, position)))
+        inputs: dict[tuple[str, int], list[tuple[int, tuple[Any, int]]]] = {}
+        for position, (kind, vr, link) in enumerate(self.delayed):
+            inputs.setdefault((kind, link.source.ratio), []).append(
+                (vr, (self._latched, position)))
         for kind, vr, link in self.feedthrough:
-            inputs.setdefault(kind, []).append((vr, link.source.source(link)))
+            inputs.setdefault((kind, link.source.ratio), []).append(
+                (vr, link.source.source(link)))
         self._writers = [(self.instance.writer(kind, [vr for vr, _ in entries]),
-                          [source for _, source in entries])
-                         for kind, entries in inputs.items()]
+                          tuple(buffer for _, (buffer, _slot) in entries),
+                          tuple(slot for _, (_buffer, slot) in entries))
+                         for (kind, _ratio), entries in inputs.items()]
         self.step = self.instance.stepper()
 
     def source(self, link: _Link) -> tuple[Any, int]:
@@ -115,12 +121,12 @@ class _Stepped:
         self._latched[:] = [buffer[slot] for buffer, slot in self._latch_sources]
 
     def apply_inputs(self) -> None:
-        """Set the inputs, one call per type; a type whose values are all unchanged since
-        the last call is not set again (an FMU keeps its inputs: fmi2Set* is only needed for
-        a change, and sample-held sensor signals change at their own rate)."""
+        """Set the inputs, one call per writer; a writer whose values are all unchanged since
+        the last call is not called again (an FMU keeps its inputs: fmi2Set* is only needed
+        for a change, and sample-held sensor signals change at their own rate)."""
         written = self._written
-        for index, (write, sources) in enumerate(self._writers):
-            values = [buffer[slot] for buffer, slot in sources]
+        for index, (write, buffers, slots) in enumerate(self._writers):
+            values = list(map(getitem, buffers, slots))
             if values != written[index]:
                 write(values)
                 written[index] = values

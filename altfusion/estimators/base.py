@@ -136,10 +136,12 @@ class Estimator(Component):
     def update(self) -> None:
         self.propagate(self.dt)
         samples = {}
+        last_count = self._last_count
         for stream in self.streams:
-            sample = self._new_sample(stream)
-            if sample is not None:
-                samples[stream] = sample
+            if getattr(self, stream.count) != last_count[stream.prefix]:
+                sample = self._new_sample(stream)
+                if sample is not None:
+                    samples[stream] = sample
         self.fuse_samples(samples)
 
     def _new_sample(self, stream: Stream) -> dict[str, float] | None:

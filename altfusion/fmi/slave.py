@@ -125,8 +125,8 @@ class CoreSlave(Fmi2Slave):
         self._getters, self._setters = {}, {}
         for kind in _FMI_TYPES.values():
             self._getters[kind], self._setters[kind] = self._accessors(kind)
-        self._readers: dict[tuple[type, tuple[int, ...]], Any] = {}
-        self._writers: dict[tuple[type, tuple[int, ...]], Any] = {}
+        self._readers: dict[type, dict[tuple[int, ...], Any]] = {k: {} for k in self._getters}
+        self._writers: dict[type, dict[tuple[int, ...], Any]] = {k: {} for k in self._getters}
 
     # ----------------------------------------------------------------- declarations
     @classmethod
@@ -212,12 +212,13 @@ class CoreSlave(Fmi2Slave):
         if self._failure is not None:
             self._log(Fmi2Status.error, f"cannot step, {self._failure}")
             return False
+        core = self.core
         try:
-            self.core.do_step(current_time, step_size)
+            core.do_step(current_time, step_size)
         except Exception:
             self._log_exception(f"doStep(t = {current_time!r} s, h = {step_size!r} s)")
             return False
-        for note in self.core.take_notes():
+        for note in core.take_notes():
             self._log(Fmi2Status.warning, note)
         return True
 
@@ -231,15 +232,13 @@ class CoreSlave(Fmi2Slave):
         return ({vr: v.getter for vr, v in typed.items()},
                 {vr: v.setter for vr, v in typed.items() if v.setter is not None})
 
-    def _batch(self, cache: dict, build, kind: type, vrs) -> Any:
-        """The accessor of the value references ``vrs`` (made once per list of them: an
-        importer asks for the same lists at every step)."""
-        key = (kind, tuple(vrs))
-        batch = cache.get(key)
-        if batch is None:
-            if len(cache) >= MAX_CACHED_BATCHES:
-                cache.clear()
-            batch = cache[key] = build(kind, key[1])
+    @staticmethod
+    def _new_batch(cache: dict, build, kind: type, vrs) -> Any:
+        """Make and keep the accessor of the value references ``vrs`` (once per list of them:
+        an importer asks for the same lists at every step)."""
+        if len(cache) >= MAX_CACHED_BATCHES:
+            cache.clear()
+        batch = cache[tuple(vrs)] = build(kind, tuple(vrs))
         return batch
 
     def _core_names(self, kind: type, vrs: tuple[int, ...], inputs_only: bool) -> list | None:
@@ -288,14 +287,18 @@ class CoreSlave(Fmi2Slave):
         if self._initializing and self._stale:
             self._refresh_initial_outputs()
         try:
-            return self._batch(self._readers, self._build_reader, kind, vrs)()
+            cache = self._readers[kind]
+            read = cache.get(tuple(vrs)) or self._new_batch(cache, self._build_reader, kind, vrs)
+            return read()
         except Exception:
             self._log_exception(label)
             return [fallback] * len(vrs)
 
     def _set(self, label: str, kind: type, vrs, values) -> None:
         try:
-            self._batch(self._writers, self._build_writer, kind, vrs)(values)
+            cache = self._writers[kind]
+            write = cache.get(tuple(vrs)) or self._new_batch(cache, self._build_writer, kind, vrs)
+            write(values)
         except Exception:
             self._log_exception(label)
 

@@ -27,7 +27,7 @@ import zlib
 from abc import abstractmethod
 from collections import deque
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any, ClassVar, NamedTuple
 
 import numpy as np
 
@@ -53,9 +53,8 @@ class SamplingParams:
     )
 
 
-@dataclass(frozen=True)
-class Sample:
-    """What a sensor measured at one sampling instant.
+class Sample(NamedTuple):
+    """What a sensor measured at one sampling instant (a named tuple: one per sample).
 
     ``values`` maps output attribute names to the values to deliver; ``new`` tells whether the
     sample is a new measurement (the count increments and the time stamp moves) or only a
@@ -122,6 +121,7 @@ class SampledSensor(Component):
         self._period_ticks = clock.ticks_in(p.sample_period, "sample_period", allow_zero=False)
         self._latency_ticks = clock.ticks_in(p.latency, "latency")
         self._first_tick = first_sample_tick(clock, p.sample_offset, self._period_ticks)
+        self._count_name, self._time_name = f"{self.prefix}_count", f"{self.prefix}_time"
         self.configure_sensor(clock)
 
     def reset(self) -> None:
@@ -136,19 +136,19 @@ class SampledSensor(Component):
 
     def update(self) -> None:
         tick = self.clock.ticks
+        queue = self._queue
         if tick >= self._first_tick and (tick - self._first_tick) % self._period_ticks == 0:
-            self._queue.append((tick + self._latency_ticks, self.time, self.measure()))
-        while self._queue and self._queue[0][0] <= tick:
-            _, stamp, sample = self._queue.popleft()
+            queue.append((tick + self._latency_ticks, self.time, self.measure()))
+        while queue and queue[0][0] <= tick:
+            _, stamp, sample = queue.popleft()
             self._deliver(stamp, sample)
 
     def _deliver(self, stamp: float, sample: Sample) -> None:
         for name, value in sample.values.items():
             setattr(self, name, value)
         if sample.new:
-            count = f"{self.prefix}_count"
-            setattr(self, count, getattr(self, count) + 1)
-            setattr(self, f"{self.prefix}_time", stamp)
+            setattr(self, self._count_name, getattr(self, self._count_name) + 1)
+            setattr(self, self._time_name, stamp)
 
     # ----------------------------------------------------------------- helpers
     def ticks_since(self, tick: int) -> float:
