@@ -40,9 +40,14 @@ from altfusion.version import CORE_VERSION
 FMI_TYPES = ("Real", "Integer", "Boolean")
 _C_TYPES = {"Real": fmi2Real, "Integer": fmi2Integer, "Boolean": fmi2Boolean}
 PY_TYPES = {"Real": float, "Integer": int, "Boolean": bool, "String": str}
-_GET_SET = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_size_t,
-                            ctypes.c_void_p)
-"""fmi2Get*/fmi2Set*(component, value references, count, values) on addresses."""
+_GET_SET = ctypes.PYFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_size_t,
+                             ctypes.c_void_p)
+"""fmi2Get*/fmi2Set*(component, value references, count, values) on addresses. The fast paths
+call the FMU holding the GIL (PYFUNCTYPE): a pythonfmu FMU takes it at once anyway, and
+releasing it to have it taken back costs a lock hand-over per call."""
+_DO_STEP = ctypes.PYFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_double, ctypes.c_double,
+                             ctypes.c_int)
+"""fmi2DoStep(component, current time, step, no-set-prior-state flag), holding the GIL."""
 
 
 def _address(array: ctypes.Array) -> ctypes.c_void_p:
@@ -281,7 +286,10 @@ class FmuInstance:
         """fmi2Get*/fmi2Set* called with plain addresses: fmpy's prototypes convert each
         array argument through ``from_param`` at every call (the buffers of the fast paths
         live as long as their closures)."""
-        return _GET_SET(ctypes.cast(getattr(self.fmu.dll, name), ctypes.c_void_p).value)
+        return self._raw(name, _GET_SET)
+
+    def _raw(self, name: str, prototype):
+        return prototype(ctypes.cast(getattr(self.fmu.dll, name), ctypes.c_void_p).value)
 
     def reader(self, kind: str, vrs: list[int]):
         """A function reading the current values of ``vrs`` into a reused ctypes buffer (and
@@ -318,8 +326,8 @@ class FmuInstance:
 
     def stepper(self):
         """A function doing fmi2DoStep(t, h) without fmpy's per-call bookkeeping."""
-        function = self.fmu._functions["fmi2DoStep"]
-        component, check = self.fmu.component, self._check_status
+        function = self._raw("fmi2DoStep", _DO_STEP)
+        component, check = self._component, self._check_status
 
         def step(time: float, step: float) -> None:
             status = function(component, time, step, 1)

@@ -296,7 +296,7 @@ class Simulation:
         self._record(data, times, 0, 0)
         tick_time = self.base.time
         latching = [(c.ratio, c.latch) for c in self._components if c.delayed]
-        stepping = [(c.ratio, c.apply_inputs, c.step, c.refresh_outputs) for c in self._order]
+        stepping = [(c.ratio, c.apply_inputs, c.step, c._linked_reads) for c in self._order]
         recorded_only = [c.refresh_recorded for c in self._components if c._recorded_reads]
         t_previous = tick_time(0)
         for n in range(steps):
@@ -305,13 +305,14 @@ class Simulation:
                     latch()
             end = n + 1
             t_end = tick_time(end)
-            for ratio, apply_inputs, step, refresh_outputs in stepping:
+            for ratio, apply_inputs, step, linked_reads in stepping:
                 if end % ratio:
                     continue
                 apply_inputs()
                 t_start = t_previous if ratio == 1 else tick_time(end - ratio)
                 step(t_start, t_end - t_start)
-                refresh_outputs()
+                for read in linked_reads:               # refresh_outputs(), inlined
+                    read()
             t_previous = t_end
             if end % every == 0:
                 for refresh_recorded in recorded_only:

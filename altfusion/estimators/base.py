@@ -21,21 +21,17 @@ from typing import ClassVar
 from altfusion.component import Component
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Stream:
-    """The inputs of one sensor stream."""
+    """The inputs of one sensor stream.
+
+    Streams are this module's constants and compare by identity: they key the per-step
+    sample dicts, where the built-in identity hash costs nothing (a field hash would run
+    Python code at every lookup)."""
 
     prefix: str
     values: tuple[str, ...]
     valid: str | None = None
-
-    def __hash__(self) -> int:
-        """The fields' hash, computed once (streams key the per-step sample dicts)."""
-        return self._hash
-
-    @cached_property
-    def _hash(self) -> int:
-        return hash((self.prefix, self.values, self.valid))
 
     @cached_property
     def count(self) -> str:
@@ -45,11 +41,14 @@ class Stream:
     def time(self) -> str:
         return f"{self.prefix}_time"
 
-    def timed(self) -> "Stream":
-        """This stream with the sample's time stamp ``<prefix>_time`` (s) among its values."""
-        if self.time in self.values:
-            return self
+    @cached_property
+    def _timed(self) -> "Stream":
         return Stream(self.prefix, (*self.values, self.time), self.valid)
+
+    def timed(self) -> "Stream":
+        """This stream with the sample's time stamp ``<prefix>_time`` (s) among its values
+        (one object per stream: streams compare by identity)."""
+        return self if self.time in self.values else self._timed
 
 
 BARO = Stream("baro", ("baro_h",))

@@ -3,6 +3,8 @@
 Written next to the equations (filterpy style) with the Joseph-form covariance update, which
 keeps P symmetric positive semi-definite for any gain, followed by explicit symmetrisation.
 All arrays are float numpy arrays; a scalar measurement has H of shape (1, n) and R (1, 1).
+Products are ``ndarray.dot``: the same BLAS call as ``@`` (the same floats), without the
+generalized-ufunc dispatch that dominates the cost of a product of 3x3 matrices.
 """
 
 from collections.abc import Sequence
@@ -21,10 +23,10 @@ def predict(x: np.ndarray, P: np.ndarray, F: np.ndarray, Q: np.ndarray,
             B: np.ndarray | None = None, u: np.ndarray | float | None = None,
             ) -> tuple[np.ndarray, np.ndarray]:
     """Time update: x⁻ = F x + B u,  P⁻ = F P Fᵀ + Q."""
-    x = F @ x
+    x = F.dot(x)
     if B is not None and u is not None:
-        x = x + B @ np.atleast_1d(u)
-    return x, symmetrize(F @ P @ F.T + Q)
+        x = x + B.dot(np.atleast_1d(u))
+    return x, symmetrize(F.dot(P).dot(F.T) + Q)
 
 
 class Update(NamedTuple):
@@ -60,17 +62,17 @@ def update(x: np.ndarray, P: np.ndarray, z: np.ndarray | float, H: np.ndarray,
     """
     z = np.asarray(z, dtype=float).reshape(-1)
     R = np.asarray(R, dtype=float).reshape(len(z), len(z))
-    y = z - H @ x
-    HP = H @ P
+    y = z - H.dot(x)
+    HP = H.dot(P)
     if len(z) == 1:                   # a scalar S: no symmetrization, no LAPACK (a hot path)
-        S = HP @ H.T + R
+        S = HP.dot(H.T) + R
         K = (gain_scale / S[0, 0]) * HP.T
     else:
-        S = symmetrize(HP @ H.T + R)
+        S = symmetrize(HP.dot(H.T) + R)
         K = gain_scale * np.linalg.solve(S, HP).T
-    I_KH = _identity(len(x)) - K @ H
-    P_new = symmetrize(I_KH @ P @ I_KH.T + K @ R @ K.T)
-    return Update(x + K @ y, P_new, y, S, K)
+    I_KH = _identity(len(x)) - K.dot(H)
+    P_new = symmetrize(I_KH.dot(P).dot(I_KH.T) + K.dot(R).dot(K.T))
+    return Update(x + K.dot(y), P_new, y, S, K)
 
 
 def update_components(x: np.ndarray, P: np.ndarray, indices: tuple[int, ...],
@@ -100,8 +102,8 @@ def update_components(x: np.ndarray, P: np.ndarray, indices: tuple[int, ...],
         K = np.linalg.solve(S, HP).T
         I_KH[:, rows] -= K
         KR = np.multiply(K, variances, order="C")
-    P_new = symmetrize(I_KH @ P @ I_KH.T + KR @ K.T)
-    return Update(x + K @ y, P_new, y, S, K)
+    P_new = symmetrize(I_KH.dot(P).dot(I_KH.T) + KR.dot(K.T))
+    return Update(x + K.dot(y), P_new, y, S, K)
 
 
 @cache

@@ -135,7 +135,7 @@ class YangFusionKF(Estimator):
         self.variances = {"radar": p.R_radar, "gps": p.R_gps, "baro": p.R_baro}
         self.h_fused = 0.0
         self.fused_std = 0.0
-        self.weights = dict.fromkeys(HEIGHT_SENSORS, 0.0)
+        self.weight_gps = self.weight_baro = self.weight_radar = 0.0
         self._stale: set[str] = set()
         self._model_dt = math.nan
         self._publish()
@@ -209,7 +209,9 @@ class YangFusionKF(Estimator):
                 if history and history[-1][0] >= t_b - self.params.max_sample_age}     # (5)
         self.h_fused, variance, weights = weighted_fusion(live, self.variances)      # (7), (8)
         self.fused_std = math.sqrt(variance)
-        self.weights = {name: weights.get(name, 0.0) for name in HEIGHT_SENSORS}
+        self.weight_gps = weights.get("gps", 0.0)
+        self.weight_baro = weights.get("baro", 0.0)
+        self.weight_radar = weights.get("radar", 0.0)
 
     def _start(self) -> None:
         """Start the filter at the first fusion: h = y, Var h = σ_y², uncorrelated."""
@@ -222,6 +224,3 @@ class YangFusionKF(Estimator):
     def _publish(self) -> None:
         self.h_est, self.vz_est, self.az_est = self.x.tolist()
         self.h_std = math.sqrt(self.P.item(0, 0))
-        self.weight_gps = self.weights["gps"]
-        self.weight_baro = self.weights["baro"]
-        self.weight_radar = self.weights["radar"]

@@ -274,12 +274,21 @@ class CoreSlave(Fmi2Slave):
                 for set_value, value in zip(setters, values, strict=True):
                     set_value(value)
             return write
-        convert = _PY_TYPES[kind]
+        # pythonfmu hands over Python floats, ints, bools or strs as the FMI type says: the
+        # values need no conversion.
+        if len(names) == 1:
+            name = names[0]
+
+            def write_input(values) -> None:
+                (value,) = values
+                setattr(self.core, name, value)
+                self._stale = self._initializing
+            return write_input
 
         def write_inputs(values) -> None:
             core = self.core
             for name, value in zip(names, values, strict=True):
-                setattr(core, name, convert(value))
+                setattr(core, name, value)
             self._stale = self._initializing
         return write_inputs
 
