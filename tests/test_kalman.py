@@ -5,7 +5,14 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from altfusion.estimators.kalman import predict, scalar_gate, update, update_components
+from altfusion.estimators.kalman import (
+    predict,
+    predict_constant_acceleration,
+    scalar_gate,
+    update,
+    update_state_component,
+    white_jerk_noise,
+)
 
 positive = st.floats(min_value=1e-3, max_value=1e4)
 
@@ -38,22 +45,58 @@ def test_vector_update_keeps_p_symmetric_positive_definite():
     assert result.nis == pytest.approx(4.0 / ((H @ P @ H.T)[0, 0] + 0.5))
 
 
-def test_component_update_is_the_general_update_bit_for_bit():
-    """update_components replaces the products by H = rows of I with indexing; it must give
-    the very same floats as update(), for one and several measured components."""
-    rng = np.random.default_rng(7)
+def _random_covariance(rng, n: int) -> np.ndarray:
+    A = rng.standard_normal((n, n)) * 10 ** rng.uniform(-2, 2)
+    return A @ A.T + 1e-3 * np.eye(n)
+
+
+def _as_tuples(P: np.ndarray) -> tuple:
+    return tuple(map(tuple, P.tolist()))
+
+
+def test_scalar_constant_acceleration_predict_is_the_matrix_one():
+    """The written-out F P Fᵀ + Q equals the matrix form to rounding, and is exactly
+    symmetric."""
+    rng = np.random.default_rng(11)
     for _ in range(500):
+        dt = 10 ** rng.uniform(-3, 0)
+        F = np.array([[1.0, dt, dt * dt / 2], [0.0, 1.0, dt], [0.0, 0.0, 1.0]])
+        Q = np.array(white_jerk_noise(dt, 10 ** rng.uniform(-3, 1)))
+        P, x = _random_covariance(rng, 3), 100 * rng.standard_normal(3)
+        x_s, P_s = predict_constant_acceleration(tuple(x), _as_tuples(P), dt, _as_tuples(Q))
+        x_m, P_m = predict(x, P, F, Q)
+        np.testing.assert_allclose(x_s, x_m, rtol=1e-12, atol=1e-12 * np.abs(x).max())
+        np.testing.assert_allclose(P_s, P_m, rtol=1e-12, atol=1e-12 * np.abs(P_m).max())
+        assert np.array_equal(np.array(P_s), np.array(P_s).T)
+
+
+def test_scalar_component_updates_one_by_one_are_the_joint_matrix_update():
+    """Independent measurements of state components applied one at a time in scalar
+    arithmetic give the joint update (H = rows of I, R diagonal) to rounding; P stays
+    exactly symmetric and positive definite."""
+    rng = np.random.default_rng(7)
+    for _ in range(300):
         n = int(rng.integers(1, 6))
-        A = rng.standard_normal((n, n)) * 10 ** rng.uniform(-3, 3)
-        P, x = A @ A.T + 1e-3 * np.eye(n), 100 * rng.standard_normal(n)
-        for k in range(1, n + 1):
-            rows = tuple(sorted(rng.choice(n, k, replace=False).tolist()))
-            z = (100 * rng.standard_normal(k)).tolist()
-            variances = (10 ** rng.uniform(-4, 3, k)).tolist()
-            fast = update_components(x, P, rows, z, variances)
-            general = update(x, P, np.array(z), np.eye(n)[list(rows)], np.diag(variances))
-            for field in fast._fields:
-                assert np.array_equal(getattr(fast, field), getattr(general, field)), field
+        P, x = _random_covariance(rng, n), 100 * rng.standard_normal(n)
+        rows = sorted(rng.choice(n, int(rng.integers(1, n + 1)), replace=False).tolist())
+        z = 100 * rng.standard_normal(len(rows))
+        variances = 10 ** rng.uniform(-3, 3, len(rows))
+        x_s, P_s = tuple(x), _as_tuples(P)
+        for row, z_j, r_j in zip(rows, z, variances, strict=True):
+            x_s, P_s, y, S = update_state_component(x_s, P_s, row, float(z_j), float(r_j))
+        joint = update(x, P, z, np.eye(n)[rows], np.diag(variances))
+        scale = np.abs(P).max()
+        np.testing.assert_allclose(x_s, joint.x, rtol=1e-9, atol=1e-9 * (1 + np.abs(x).max()))
+        np.testing.assert_allclose(P_s, joint.P, rtol=1e-9, atol=1e-9 * scale)
+        assert np.array_equal(np.array(P_s), np.array(P_s).T)
+        assert np.all(np.linalg.eigvalsh(np.array(P_s)) > 0)
+
+
+def test_scalar_component_update_returns_innovation_and_its_variance():
+    x, P, y, S = update_state_component((1.0, 2.0), ((4.0, 1.0), (1.0, 3.0)), 1, 5.0, 1.0)
+    assert (y, S) == (3.0, 4.0)
+    assert x == pytest.approx((1.0 + 0.25 * 3.0, 2.0 + 0.75 * 3.0))
+    assert P[1][1] == pytest.approx(3.0 - 9.0 / 4.0)
 
 
 def test_predict_propagates_mean_and_covariance():

@@ -22,11 +22,14 @@ smallest (8.57 m for 30 / 20 / 10 m). The σ_i are the parameters R_gps, R_baro,
 
 Section 3.3, Kalman filter (eqs. 9-14) on Ω = [y, v, a]: A of eq. (9) for each step of the
 estimator, and at each step the rows of Ψ = H·Ω + δ (H = I) for which a sample arrived: the
-fused height (σ_y²), the GPS vertical speed (σ_v²) and the IMU acceleration (σ_a²), in one
-update (eqs. 12-14, Joseph form). The paper's filter has no process noise (eq. 11); taken
-literally it cannot follow the trajectory's acceleration steps (NOTES.md), so eq. (11) gets a
-white-jerk process noise of spectral density ``jerk_psd`` (an addition, Q = q·∫ φφᵀ with
-φ = [t²/2, t, 1]). The filter starts at the first fusion with h = y, Var h = σ_y².
+fused height (σ_y²), the GPS vertical speed (σ_v²) and the IMU acceleration (σ_a²): eqs. 12-14
+in Joseph form, the independent rows applied one after the other (the joint update, for a
+diagonal R), in the shared machinery's scalar arithmetic (a 3-state filter stepped at 100 Hz,
+where numpy's per-call overhead would dominate). The paper's filter has no process noise
+(eq. 11); taken literally it cannot follow the trajectory's acceleration steps (NOTES.md), so
+eq. (11) gets a white-jerk process noise of spectral density ``jerk_psd`` (an addition,
+Q = q·∫ φφᵀ with φ = [t²/2, t, 1]). The filter starts at the first fusion with h = y,
+Var h = σ_y².
 
 Additions for robustness: a height sample whose difference from the filter's predicted height
 exceeds ``gate_sigma`` standard deviations √(P_hh + σ_i²) is rejected and logged before it
@@ -46,10 +49,13 @@ import math
 from collections import deque
 from dataclasses import dataclass
 
-import numpy as np
-
 from altfusion.estimators.base import ACC, BARO_TIMED, GPS_VZ_TIMED, RADAR_TIMED, Estimator
-from altfusion.estimators.kalman import predict, scalar_gate, update_components
+from altfusion.estimators.kalman import (
+    predict_constant_acceleration,
+    scalar_gate,
+    update_state_component,
+    white_jerk_noise,
+)
 from altfusion.params import param
 
 HEIGHT_SENSORS = ("radar", "gps", "baro")
@@ -77,20 +83,6 @@ def weighted_fusion(heights: dict[str, float], variances: dict[str, float],
     information = sum(1.0 / variances[name] for name in heights)
     weights = {name: 1.0 / (variances[name] * information) for name in heights}
     return sum(weights[n] * heights[n] for n in heights), 1.0 / information, weights
-
-
-def transition(dt: float) -> np.ndarray:
-    """A of eq. (9) over dt."""
-    return np.array([[1.0, dt, dt * dt / 2.0], [0.0, 1.0, dt], [0.0, 0.0, 1.0]])
-
-
-def white_jerk_noise(dt: float, jerk_psd: float) -> np.ndarray:
-    """Process noise of a white jerk of spectral density q over dt (not in the paper)."""
-    return jerk_psd * np.array([
-        [dt**5 / 20.0, dt**4 / 8.0, dt**3 / 6.0],
-        [dt**4 / 8.0, dt**3 / 3.0, dt**2 / 2.0],
-        [dt**3 / 6.0, dt**2 / 2.0, dt],
-    ])
 
 
 @dataclass(frozen=True)
@@ -128,8 +120,8 @@ class YangFusionKF(Estimator):
 
     def initialize_filter(self) -> None:
         p = self.params
-        self.x = np.zeros(3)
-        self.P = np.diag([p.R_baro, p.P0_vz, p.P0_az])
+        self.x = (0.0, 0.0, 0.0)
+        self.P = ((p.R_baro, 0.0, 0.0), (0.0, p.P0_vz, 0.0), (0.0, 0.0, p.P0_az))
         self.started = False
         self.history = {name: deque(maxlen=2) for name in HEIGHT_SENSORS}
         self.variances = {"radar": p.R_radar, "gps": p.R_gps, "baro": p.R_baro}
@@ -141,11 +133,12 @@ class YangFusionKF(Estimator):
         self._publish()
 
     def propagate(self, dt: float) -> None:
-        """Eqs. (10)-(11) with the white-jerk process noise."""
+        """Eqs. (9)-(11) with the white-jerk process noise (A of eq. 9 is the constant-
+        acceleration model, written out in scalar arithmetic)."""
         if dt != self._model_dt:                  # the estimator's step: built once
-            self._model = transition(dt), white_jerk_noise(dt, self.params.jerk_psd)
+            self._Q = white_jerk_noise(dt, self.params.jerk_psd)
             self._model_dt = dt
-        self.x, self.P = predict(self.x, self.P, *self._model)
+        self.x, self.P = predict_constant_acceleration(self.x, self.P, dt, self._Q)
 
     def fuse_samples(self, samples) -> None:
         """Gate and store the new heights, fuse at a benchmark sample, then one KF update
@@ -178,18 +171,18 @@ class YangFusionKF(Estimator):
         acc = samples.get(ACC)
         if acc is not None:
             measurements.append((2, acc["acc_z"], p.R_acc))
-        if measurements:                                              # (12)-(14), H = I
-            rows, z, R = zip(*measurements, strict=True)
-            result = update_components(self.x, self.P, rows, z, R)
-            self.x, self.P = result.x, result.P
+        x, P = self.x, self.P                    # (12)-(14), H = I: the rows one by one
+        for index, z, R in measurements:
+            x, P, _, _ = update_state_component(x, P, index, z, R)
+        self.x, self.P = x, P
         self._publish()
 
     def _gate(self, name: str, stream, z: float) -> bool:
         """True if the height sample may enter the fusion (always before the filter starts)."""
         if not self.started:
             return True
-        innovation = z - self.x.item(0)
-        variance = self.P.item(0, 0) + self.variances[name]
+        innovation = z - self.x[0]
+        variance = self.P[0][0] + self.variances[name]
         if scalar_gate(innovation, variance, self.params.gate_sigma):
             return True
         self.reject(stream, innovation, math.sqrt(variance))
@@ -215,12 +208,12 @@ class YangFusionKF(Estimator):
 
     def _start(self) -> None:
         """Start the filter at the first fusion: h = y, Var h = σ_y², uncorrelated."""
-        self.x[0] = self.h_fused
-        self.P[0, :] = 0.0
-        self.P[:, 0] = 0.0
-        self.P[0, 0] = self.fused_std**2
+        _, vz, az = self.x
+        (_, _, _), (_, p11, p12), (_, _, p22) = self.P
+        self.x = (self.h_fused, vz, az)
+        self.P = ((self.fused_std**2, 0.0, 0.0), (0.0, p11, p12), (0.0, p12, p22))
         self.started = True
 
     def _publish(self) -> None:
-        self.h_est, self.vz_est, self.az_est = self.x.tolist()
-        self.h_std = math.sqrt(self.P.item(0, 0))
+        self.h_est, self.vz_est, self.az_est = self.x
+        self.h_std = math.sqrt(self.P[0][0])
