@@ -7,12 +7,13 @@ Products are ``ndarray.dot``: the same BLAS call as ``@`` (the same floats), wit
 generalized-ufunc dispatch that dominates the cost of a product of 3x3 matrices.
 
 For small filters stepped at high rates the same equations exist in scalar arithmetic on
-Python floats (vectors are tuples, matrices tuples of row tuples): a numpy operation on a 3x3
-array costs ~0.5 µs whatever it computes, a float operation ~0.03 µs. They agree with the
-numpy forms to rounding (tests/test_kalman.py) but not bit for bit: BLAS sums and fuses its
-products in its own order.
+Python floats (vectors are sequences of floats, matrices sequences of rows): a numpy
+operation on a 3x3 array costs ~0.5 µs whatever it computes, a float operation ~0.03 µs.
+They agree with the numpy forms to rounding (tests/test_kalman.py) but not bit for bit: BLAS
+sums and fuses its products in its own order.
 """
 
+from collections.abc import Sequence
 from functools import cache
 from typing import NamedTuple
 
@@ -96,8 +97,8 @@ def scalar_gate(innovation: float, variance: float, sigmas: float) -> bool:
 
 
 # ----------------------------------------------------------------- scalar arithmetic
-Vector = tuple[float, ...]
-Matrix = tuple[tuple[float, ...], ...]
+Vector = Sequence[float]
+Matrix = Sequence[Sequence[float]]
 
 
 def white_jerk_noise(dt: float, jerk_psd: float) -> Matrix:
@@ -150,9 +151,8 @@ def update_state_component(x: Vector, P: Matrix, index: int, z: float, variance:
     S = row[index] + variance
     K = [p / S for p in row]
     y = z - x[index]
-    x_new = tuple(xa + ka * y for xa, ka in zip(x, K, strict=True))
-    P_new = tuple(
-        tuple(p_ab - (k_a * r_b + r_a * k_b) + k_a * k_b * S
-              for p_ab, r_b, k_b in zip(P_a, row, K, strict=True))
-        for P_a, r_a, k_a in zip(P, row, K, strict=True))
+    x_new = [xa + ka * y for xa, ka in zip(x, K, strict=True)]
+    P_new = [[p_ab - (k_a * r_b + r_a * k_b) + k_a * k_b * S               # lists: the
+              for p_ab, r_b, k_b in zip(P_a, row, K, strict=True)]         # fastest to build
+             for P_a, r_a, k_a in zip(P, row, K, strict=True)]
     return x_new, P_new, y, S
