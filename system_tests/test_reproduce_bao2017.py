@@ -12,13 +12,11 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from altfusion.cosim.results import Results
 from altfusion.estimators.bao import gps_height_std
 from altfusion.montecarlo.statistics import mean_interval
 from altfusion.montecarlo.storage import read_run
 from altfusion.reproduce import bao2017
 from altfusion.reproduce.common import (
-    REFERENCE_FOLDER,
     load_runs,
     reference_differences,
     reference_results,
@@ -160,11 +158,8 @@ def test_bao_campaign_run_0_is_the_reference(bao):
     """The reference CSV is run 0 of master seed 0: the reproduction's run 0."""
     out, _, _ = bao
     reference = bao2017.REFERENCES[0]
-    stored = Results.from_csv(ROOT / REFERENCE_FOLDER / reference.file_name)
     run = read_run(out / "adaptive", 0).results
-    every = round(reference.interval / OUTPUT_INTERVAL)
-    decimated = Results(run.time[::every], {n: run[n][::every] for n in reference.columns})
-    assert reference_differences(decimated, stored) == []
+    assert reference_differences(reference.sampled(run), reference.stored(ROOT)) == []
 
 
 @pytest.mark.parametrize("reference", bao2017.REFERENCES, ids=lambda r: r.system)
@@ -172,5 +167,5 @@ def test_bao_scenario_matches_its_reference_csv(fmus, reference):
     """Run 0 of master seed 0 equals its reference CSV to 1e-9 relative (absolute floor 1e-9
     of the column's largest value). After an intended change, regenerate with
     ``python -m altfusion.reproduce.common bao2017``."""
-    stored = Results.from_csv(ROOT / REFERENCE_FOLDER / reference.file_name)
-    assert reference_differences(reference_results(reference, MODELS), stored) == []
+    assert reference_differences(reference_results(reference, MODELS),
+                                 reference.stored(ROOT)) == []

@@ -14,13 +14,11 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from altfusion.cosim.results import Results
 from altfusion.montecarlo.storage import read_run
 from altfusion.physics.barometric import height_from_pressure, pressure_at
 from altfusion.physics.profiles import make_profile
 from altfusion.reproduce import hajiyev, whang2008
 from altfusion.reproduce.common import (
-    REFERENCE_FOLDER,
     load_runs,
     reference_differences,
     reference_results,
@@ -123,11 +121,8 @@ def test_whang_campaign_run_0_is_the_reference(whang):
     """The reference CSV is run 0 of master seed 0: the reproduction's run 0."""
     out, _, _ = whang
     reference = whang2008.REFERENCES[0]
-    stored = Results.from_csv(ROOT / REFERENCE_FOLDER / reference.file_name)
     run = read_run(out / "WhangGAEstimator", 0).results
-    every = round(reference.interval / 0.2)
-    decimated = Results(run.time[::every], {n: run[n][::every] for n in reference.columns})
-    assert reference_differences(decimated, stored) == []
+    assert reference_differences(reference.sampled(run), reference.stored(ROOT)) == []
 
 
 # ------------------------------------------------------------------------------ seed 002
@@ -247,5 +242,5 @@ def test_paper_scenario_matches_its_reference_csv(fmus, reference):
     """Run 0 of master seed 0 of each paper scenario equals its reference CSV to 1e-9
     relative (absolute floor 1e-9 of the column's largest value). After an intended change,
     regenerate with ``python -m altfusion.reproduce.common whang2008 hajiyev``."""
-    stored = Results.from_csv(ROOT / REFERENCE_FOLDER / reference.file_name)
-    assert reference_differences(reference_results(reference, MODELS), stored) == []
+    assert reference_differences(reference_results(reference, MODELS),
+                                 reference.stored(ROOT)) == []

@@ -14,11 +14,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from altfusion.cosim.results import Results
 from altfusion.montecarlo.storage import read_run
 from altfusion.reproduce import xu2016
-from altfusion.reproduce.common import REFERENCE_FOLDER, load_runs, reference_differences
-from altfusion.systems.xu2016 import OUTPUT_INTERVAL, SENSORS
+from altfusion.reproduce.common import load_runs, reference_differences
+from altfusion.systems.xu2016 import SENSORS
 
 ROOT = Path(__file__).resolve().parents[1]
 MODELS = ROOT / "models"
@@ -124,10 +123,7 @@ def test_xu_campaign_run_0_is_the_reference(xu, reference):
     CSV to 1e-9 relative. After an intended change, regenerate with
     ``python -m altfusion.reproduce.common xu2016``."""
     out, _, _ = xu
-    stored = Results.from_csv(ROOT / REFERENCE_FOLDER / reference.file_name)
     folder = next(s.campaign.folder for s in xu2016.SCENARIOS.values()
                   if s.campaign.system == reference.system)
     run = read_run(out / folder, 0).results
-    every = round(reference.interval / OUTPUT_INTERVAL)
-    decimated = Results(run.time[::every], {n: run[n][::every] for n in reference.columns})
-    assert reference_differences(decimated, stored) == []
+    assert reference_differences(reference.sampled(run), reference.stored(ROOT)) == []

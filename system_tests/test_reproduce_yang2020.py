@@ -11,11 +11,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from altfusion.cosim.results import Results
 from altfusion.montecarlo.statistics import rms_chi2_bounds
 from altfusion.montecarlo.storage import read_run
 from altfusion.reproduce import yang2020
-from altfusion.reproduce.common import REFERENCE_FOLDER, reference_differences
+from altfusion.reproduce.common import reference_differences
 
 ROOT = Path(__file__).resolve().parents[1]
 MODELS = ROOT / "models"
@@ -90,8 +89,5 @@ def test_yang_campaign_run_0_is_the_reference(yang, reference):
     run 0 is that run, so the reduced Monte Carlo above is the full reproduction's start."""
     out, _, _ = yang
     campaign = {c.system: c.folder for c in yang2020.CAMPAIGNS}[reference.system]
-    stored = Results.from_csv(ROOT / REFERENCE_FOLDER / reference.file_name)
     run = read_run(out / campaign, 0).results
-    every = round(reference.interval / yang2020.RECORD_INTERVAL)
-    decimated = Results(run.time[::every], {n: run[n][::every] for n in reference.columns})
-    assert reference_differences(decimated, stored) == []
+    assert reference_differences(reference.sampled(run), reference.stored(ROOT)) == []

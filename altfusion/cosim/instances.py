@@ -282,19 +282,16 @@ class FmuInstance:
         if self.messages:
             self._raise_logged_errors(what)
 
-    def _raw_get_set(self, name: str):
-        """fmi2Get*/fmi2Set* called with plain addresses: fmpy's prototypes convert each
-        array argument through ``from_param`` at every call (the buffers of the fast paths
-        live as long as their closures)."""
-        return self._raw(name, _GET_SET)
-
     def _raw(self, name: str, prototype):
+        """The FMI function ``name`` of this FMU's library with our ``prototype`` instead of
+        fmpy's, whose array arguments go through ``from_param`` at every call (the fast paths
+        pass plain addresses of buffers that live as long as their closures)."""
         return prototype(ctypes.cast(getattr(self.fmu.dll, name), ctypes.c_void_p).value)
 
     def reader(self, kind: str, vrs: list[int]):
         """A function reading the current values of ``vrs`` into a reused ctypes buffer (and
         returning it), and that buffer."""
-        function = self._raw_get_set(f"fmi2Get{kind}")
+        function = self._raw(f"fmi2Get{kind}", _GET_SET)
         refs = (fmi2ValueReference * len(vrs))(*vrs)
         buffer = (_C_TYPES[kind] * len(vrs))()
         component, count, check = self._component, ctypes.c_size_t(len(vrs)), self._check_status
@@ -310,7 +307,7 @@ class FmuInstance:
 
     def writer(self, kind: str, vrs: list[int]):
         """A function setting ``vrs`` to a sequence of values (reused ctypes buffers)."""
-        function = self._raw_get_set(f"fmi2Set{kind}")
+        function = self._raw(f"fmi2Set{kind}", _GET_SET)
         refs = (fmi2ValueReference * len(vrs))(*vrs)
         buffer = (_C_TYPES[kind] * len(vrs))()
         component, count, check = self._component, ctypes.c_size_t(len(vrs)), self._check_status

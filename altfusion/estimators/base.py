@@ -137,18 +137,17 @@ class Estimator(Component):
         samples = {}
         last_count = self._last_count
         for stream in self.streams:
-            if getattr(self, stream.count) != last_count[stream.prefix]:
-                sample = self._new_sample(stream)
+            count = getattr(self, stream.count)
+            if count != last_count[stream.prefix]:
+                sample = self._new_sample(stream, count)
                 if sample is not None:
                     samples[stream] = sample
         self.fuse_samples(samples)
 
-    def _new_sample(self, stream: Stream) -> dict[str, float] | None:
-        """The stream's sample if its count changed and it is valid and finite, else None."""
-        count = getattr(self, stream.count)
+    def _new_sample(self, stream: Stream, count: int) -> dict[str, float] | None:
+        """The sample of ``stream``, whose count changed to ``count``, if it is valid and
+        finite, else None."""
         last = self._last_count[stream.prefix]
-        if count == last:
-            return None
         self._last_count[stream.prefix] = count
         if count > last + 1:
             self.note(f"{stream.prefix}: {count - last - 1} sample(s) arrived between two "

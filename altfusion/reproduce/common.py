@@ -333,18 +333,25 @@ class Reference:
     def file_name(self) -> str:
         return f"{self.system}_seed{self.master_seed}.csv"
 
+    def stored(self, root: Path) -> Results:
+        """The reference CSV kept in the project whose folder is ``root``."""
+        return Results.from_csv(Path(root) / REFERENCE_FOLDER / self.file_name)
+
+    def sampled(self, results: Results) -> Results:
+        """This reference's columns of a run, every ``interval`` seconds (the run's own
+        output interval is read from its time axis)."""
+        every = round(self.interval / (results.time[1] - results.time[0]))
+        rows = slice(0, None, every)
+        return Results(results.time[rows], {n: results[n][rows] for n in self.columns},
+                       {n: results.units.get(n, "") for n in self.columns})
+
 
 def reference_results(reference: Reference, models: Path) -> Results:
     """Simulate the reference run and keep its columns every ``interval`` seconds."""
     loaded = read_ssp(Path(models) / f"{reference.system}.ssp")
-    spec = loaded.spec
     seeds = run_seeds(reference.master_seed, reference.run,
-                      seeded_components(spec, loaded.fmu_paths))
-    results = simulate(spec, loaded.fmu_paths, parameters=seeds)
-    every = round(reference.interval / (spec.output_interval or spec.base_step))
-    rows = slice(0, None, every)
-    return Results(results.time[rows], {n: results[n][rows] for n in reference.columns},
-                   {n: results.units.get(n, "") for n in reference.columns})
+                      seeded_components(loaded.spec, loaded.fmu_paths))
+    return reference.sampled(simulate(loaded.spec, loaded.fmu_paths, parameters=seeds))
 
 
 def reference_differences(results: Results, stored: Results,

@@ -138,9 +138,6 @@ class SampledSensor(Component):
         tick = self.clock.ticks
         queue = self._queue
         if tick >= self._first_tick and (tick - self._first_tick) % self._period_ticks == 0:
-            if not self._latency_ticks and not queue:       # no latency: delivered at once
-                self._deliver(self.time, self.measure())
-                return
             queue.append((tick + self._latency_ticks, self.time, self.measure()))
         while queue and queue[0][0] <= tick:
             _, stamp, sample = queue.popleft()
