@@ -23,6 +23,8 @@ import control
 import numpy as np
 import pytest
 
+import altfusion.interop  # noqa: E402, F401  (loads the engines' native libraries first)
+
 pytest.importorskip("libcosimpy", reason="the interop extra is not installed")
 pytest.importorskip("ecospy", reason="the interop extra is not installed")
 pytest.importorskip("fmu_manipulation_toolbox", reason="the interop extra is not installed")

@@ -13,4 +13,10 @@
   files (SSP 1.0 schemas, OSP annotations) without network access.
 
 The third-party packages are the ``interop`` extra; each module imports them only when used.
+Importing this package loads the native libraries they need from the environment
+(:mod:`~altfusion.interop.native`).
 """
+
+from altfusion.interop.native import preload_engine_libraries
+
+preload_engine_libraries()

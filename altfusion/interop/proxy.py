@@ -27,6 +27,7 @@ from altfusion.interop.engines import (
     parameter_set_names,
     reject_bad_parameters,
 )
+from altfusion.interop.native import environment_lib
 
 
 def libpython() -> Path:
@@ -41,10 +42,13 @@ def libpython() -> Path:
 
 def python_environment() -> dict[str, str]:
     """What a non-Python host needs to run our FMUs: libpython preloaded, this Python's home
-    and the site-packages that hold numpy."""
+    and the site-packages that hold numpy; the environment's library folder (libtbb) on the
+    loader's path."""
     paths = [*site.getsitepackages(), *os.environ.get("PYTHONPATH", "").split(os.pathsep)]
+    libraries = [str(environment_lib()), *os.environ.get("LD_LIBRARY_PATH", "").split(os.pathsep)]
     return {
         "LD_PRELOAD": str(libpython()),
+        "LD_LIBRARY_PATH": os.pathsep.join(p for p in libraries if p),
         "PYTHONHOME": sys.base_prefix,
         "PYTHONPATH": os.pathsep.join(p for p in paths if p),
     }
