@@ -696,6 +696,7 @@ def test_without_preloaded_libpython_the_proxy_cannot_load_the_fmus(ssp_files, t
 
     proxied = proxy_ssp(ssp_files["plant_yang2020"], tmp_path / "proxied.ssp")
     env = {k: v for k, v in os.environ.items() if k != "LD_PRELOAD"}
+    env["LD_LIBRARY_PATH"] = python_environment()["LD_LIBRARY_PATH"]   # libtbb, not libpython
     completed = subprocess.run(
         [str(ecos_binaries() / "ecos"), "simulate", "--path", str(proxied), "--stepSize", "0.01",
          "--stopTime", "0.1", "--noCsv"], cwd=tmp_path, env=env, capture_output=True, text=True,
