@@ -1,7 +1,16 @@
 """altfusion: barometer/GPS altitude estimation components for co-simulation.
 
-The core (physics, sensors, estimators) is plain Python + numpy. FMI lives at two edges:
-``altfusion.fmi`` (the pythonfmu adapter base) and ``altfusion.cosim`` (the fmpy runner).
+The core numerics (``physics``, ``sensors``, ``estimators``) are plain Python + numpy and
+import no FMI code. FMI lives at three edges:
+
+* ``altfusion.fmi``: the pythonfmu adapter base every FMU's slave script builds on;
+* ``altfusion.cosim``: our multi-rate runner on fmpy and the SSP reader/writer (its plain-data
+  system description, ``altfusion.cosim.system``, imports no FMI library);
+* ``altfusion.interop``: third-party engines (libcosim, ECOS), OSP export, FMU containers and
+  compliance checks (the ``interop`` extra, imported only when used).
+
+The import contracts in ``pyproject.toml`` (checked by ``tests/test_architecture.py``) enforce
+this.
 """
 
 from altfusion.version import CORE_VERSION, __version__

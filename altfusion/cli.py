@@ -1,35 +1,34 @@
 """Command line: ``altfusion run SYSTEM.ssp`` and friends."""
 
 import argparse
+import math
+import os
 import sys
 from pathlib import Path
-from typing import Any
+from typing import NoReturn
 
-from altfusion.cosim.instances import PY_TYPES, CosimError, fmu_info
-from altfusion.cosim.runner import Simulation
+from altfusion.cosim.instances import CosimError
+from altfusion.cosim.runner import RunFailedError, Simulation
+from altfusion.cosim.settings import parse_settings
 from altfusion.cosim.ssp import LoadedSystem, read_ssp
+from altfusion.errors import ParameterError, UsageError
 from altfusion.montecarlo.commands import add_commands as add_montecarlo_commands
-from altfusion.systems.replay import CATALOG_ESTIMATORS
+from altfusion.replay.system import CATALOG_ESTIMATORS
+
+INCOMPLETE = ".incomplete"
+"""Suffix before '.csv'/'.png' of the results of a run that failed part way."""
 
 
-def parse_settings(loaded: LoadedSystem, settings: list[str]) -> dict[str, Any]:
-    """'comp.var=value' strings converted to each parameter's FMI type."""
-    values: dict[str, Any] = {}
-    for setting in settings:
-        path, sep, text = setting.partition("=")
-        component, _, name = path.partition(".")
-        if not sep or not name:
-            raise SystemExit(f"--set {setting!r}: expected component.parameter=value")
-        spec = loaded.spec.component(component)
-        var = fmu_info(loaded.fmu_paths[spec.fmu]).variables.get(name)
-        if var is None or var.causality != "parameter":
-            raise SystemExit(f"--set {setting!r}: {spec.fmu} has no parameter '{name}'")
-        kind = PY_TYPES[var.type]
-        if kind is bool:
-            values[path] = text.strip().lower() in ("1", "true", "yes")
-        else:
-            values[path] = kind(float(text)) if kind is int else kind(text)
-    return values
+def output_folder(out: str | Path) -> Path:
+    """``out`` created and checked writable before any work, or a UsageError naming it."""
+    folder = Path(out)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise UsageError(f"--out {out}: cannot create the folder ({error.strerror})") from error
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise UsageError(f"--out {out}: folder not writable")
+    return folder
 
 
 def command_run(args: argparse.Namespace) -> int:
@@ -39,21 +38,33 @@ def command_run(args: argparse.Namespace) -> int:
     loaded = read_ssp(args.system)
     settings = parse_settings(loaded, args.set)
     spec = loaded.spec
+    out = output_folder(args.out)
+    failure = None
     with Simulation(spec, loaded.fmu_paths, backend=args.backend) as simulation:
-        results = simulation.run(stop_time=args.stop, parameters=settings)
-    out = Path(args.out)
-    csv_path = results.to_csv(out / f"{spec.name}.csv")
-    png_path = plot_results(results, out / f"{spec.name}.png", spec.name, spec.description)
+        try:
+            results = simulation.run(stop_time=args.stop, parameters=settings)
+        except RunFailedError as error:
+            failure, results = error, error.results
+    stem = f"{spec.name}{INCOMPLETE}" if failure else spec.name
+    csv_path = results.to_csv(out / f"{stem}.csv")
+    files = [str(csv_path)]
+    if len(results.time) > 1:
+        files.append(str(plot_results(results, out / f"{stem}.png", spec.name,
+                                      spec.description)))
     print(f"{spec.name}: {spec.description}")
     print(f"simulated {results.time[0]:g} s to {results.time[-1]:g} s "
           f"({len(spec.components)} components, base step {spec.base_step:g} s)\n")
-    print(format_summary(results, spec.metrics))
-    print(f"\nwrote {csv_path} and {png_path}")
+    if len(results.time) > 1:
+        print(format_summary(results, spec.metrics))
+    print(f"\nwrote {' and '.join(files)}")
+    if failure:
+        print(f"error: run failed after t = {results.time[-1]:g} s, results so far written "
+              f"(marked {INCOMPLETE}): {one_line(failure)}", file=sys.stderr)
+        return 1
     return 0
 
 
 def command_replay(args: argparse.Namespace) -> int:
-    from altfusion.cosim.ssp import LoadedSystem
     from altfusion.replay.compare import format_table, sample_counts
     from altfusion.replay.run import plan_replay, run_replay
     from altfusion.replay.ulog import LogReadError
@@ -109,11 +120,14 @@ def command_reproduce(args: argparse.Namespace) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="altfusion", description=__doc__)
-    commands = parser.add_subparsers(dest="command", required=True)
+    parser = _Parser(prog="altfusion", description=__doc__)
+    parser.add_argument("--debug", action="store_true",
+                        help="show Python tracebacks instead of one-line errors")
+    commands = parser.add_subparsers(dest="command", required=True,
+                                     parser_class=_Parser)
     run = commands.add_parser("run", help="co-simulate an SSP system, write CSV and a plot")
     run.add_argument("system", type=Path, help="SSP archive (models/*.ssp)")
-    run.add_argument("--stop", type=float, default=None, help="stop time, s")
+    run.add_argument("--stop", type=finite_time, default=None, help="stop time, s")
     run.add_argument("--set", action="append", default=[], metavar="COMP.PARAM=VALUE",
                      help="override a parameter (repeatable)")
     run.add_argument("--out", default="results", help="output folder (default: results)")
@@ -133,7 +147,7 @@ def build_parser() -> argparse.ArgumentParser:
     replay.add_argument("--paper-tuning", action="store_true",
                         help="run the estimators with their papers' defaults instead of the "
                              "replay tuning")
-    replay.add_argument("--time-offset", type=float, default=0.0,
+    replay.add_argument("--time-offset", type=finite_time, default=0.0,
                         help="log time replayed at simulation time 0, s")
     replay.set_defaults(handler=command_replay)
     design = commands.add_parser("controller-design",
@@ -158,13 +172,52 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with the one-line ``error: ...`` convention (exit status 2)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"error: {self.prog}: {message} (see {self.prog} --help)\n")
+
+
+def finite_time(text: str) -> float:
+    """A finite time >= 0 in s (argparse type of --stop)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a time in s, not {text!r}") from None
+    if not math.isfinite(value) or value < 0:
+        raise argparse.ArgumentTypeError(f"expected a finite time >= 0 s, not {text!r}")
+    return value
+
+
+USER_ERRORS = (UsageError, ParameterError, CosimError, OSError, KeyError, ValueError)
+"""What a user's mistake raises (a bad file, name or value): reported in one line, status 2."""
+
+
+def one_line(error: BaseException) -> str:
+    """The first line of an error's message (a component's report may append its traceback;
+    ``--debug`` shows all of it)."""
+    message = error.args[0] if isinstance(error, KeyError) and error.args else str(error)
+    return str(message).strip().splitlines()[0] if str(message).strip() else repr(error)
+
+
 def main(argv: list[str] | None = None) -> int:
+    """Run a command: 0 on success, 1 when a run failed (results so far written),
+    2 on a user's mistake (one line ``error: ...`` on stderr; ``--debug``: the traceback)."""
     args = build_parser().parse_args(argv)
     try:
         return args.handler(args)
-    except CosimError as error:
-        print(f"error: {error}", file=sys.stderr)
+    except USER_ERRORS as error:
+        if args.debug:
+            raise
+        print(f"error: {one_line(error)}", file=sys.stderr)
         return 2
+    except Exception as error:
+        if args.debug:
+            raise
+        print(f"error: {type(error).__name__}: {one_line(error)} (rerun with --debug for "
+              f"the traceback)", file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":

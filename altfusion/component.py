@@ -1,7 +1,7 @@
 """The base of every core model: parameters, an exact tick clock, inputs and outputs.
 
 A component is a discrete-time system on a fixed step. Its inputs and outputs are plain
-attributes named as in the signal contract (``../shared/spec/signals.md``); the FMU adapter
+attributes named as in the signal contract (``docs/signals.md``); the FMU adapter
 and the runner's direct (no-FMI) backend both map variables onto these attributes by name.
 Subclasses give their inputs default values before calling ``Component.__init__``, which
 applies any ``inputs`` given, validates the parameters and sets the initial state: a component

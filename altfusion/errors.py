@@ -15,3 +15,8 @@ class ParameterError(ValueError):
 
 class StepError(RuntimeError):
     """A step request the component cannot honour (wrong time or step size)."""
+
+
+class UsageError(ValueError):
+    """A user's mistake in a command line or an input file; the message names the file,
+    component or parameter. The command line reports it in one line, exit status 2."""

@@ -71,9 +71,7 @@ def check_params(params: Any) -> None:
         if info.type is float:
             if isinstance(value, bool) or not isinstance(value, (int, float)):
                 raise ParameterError(info.name, value, "must be a real number")
-            if math.isnan(value):
-                raise ParameterError(info.name, value, "must not be NaN")
-            if math.isinf(value) and (info.min is not None or info.max is not None):
+            if not math.isfinite(value):
                 raise ParameterError(info.name, value, "must be finite")
         elif info.type is int and (isinstance(value, bool) or not isinstance(value, int)):
             raise ParameterError(info.name, value, "must be an integer")

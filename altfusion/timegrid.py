@@ -20,6 +20,9 @@ class TickClock:
     """Counts fixed steps of ``step_size`` from ``start_time``."""
 
     def __init__(self, step_size: float, start_time: float = 0.0, name: str = "step_size"):
+        for label, value in ((name, step_size), ("start_time", start_time)):
+            if not math.isfinite(value):
+                raise ParameterError(label, value, "must be finite")
         step = exact(step_size)
         if step <= 0:
             raise ParameterError(name, step_size, "must be > 0")
@@ -40,6 +43,8 @@ class TickClock:
 
     def ticks_in(self, duration: float, name: str, allow_zero: bool = True) -> int:
         """``duration`` as a whole number of steps, or a ParameterError naming ``name``."""
+        if not math.isfinite(duration):
+            raise ParameterError(name, duration, "must be finite")
         quotient = exact(duration) / self._step
         if quotient.denominator != 1:
             raise ParameterError(

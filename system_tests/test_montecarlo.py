@@ -4,6 +4,7 @@ reports and the estimator-swapping machinery of ``altfusion compare``."""
 
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -18,7 +19,7 @@ from altfusion.cosim import ComponentSpec, Connection, Metric, SystemSpec, write
 from altfusion.montecarlo.aggregation import aggregate
 from altfusion.montecarlo.execution import CampaignSettings, Execution, run_campaign
 from altfusion.montecarlo.source import CampaignError, SystemSource
-from altfusion.montecarlo.storage import finished_runs, read_manifest, read_run
+from altfusion.montecarlo.storage import finished_runs, read_manifest, read_run, run_path
 from altfusion.montecarlo.tables import statistics_json
 from altfusion.systems.plant import plant_components, plant_connections
 
@@ -173,6 +174,46 @@ def test_a_killed_worker_keeps_the_finished_runs_for_resume(gusty_ssp, reference
     outcome = run_campaign(SystemSource.from_path(gusty_ssp), out, CampaignSettings(),
                            Execution(workers=2, progress=False), resume=True)
     assert outcome.complete
+    assert_same_runs(out, reference)
+
+
+def test_workers_end_within_10_s_of_their_parents_death(gusty_ssp, tmp_path):
+    """kill -9 of `altfusion mc` cannot stop its workers: their watchdog (polling every
+    PARENT_POLL = 1 s) must, within the 10 s the issue allows."""
+    out = tmp_path / "orphaned"
+    process = subprocess.Popen(cli("mc", str(gusty_ssp), "-n", str(RUNS), "--workers", "2",
+                                   "--out", str(out), "--quiet"),
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    wait_for_runs(out, 1, process)
+    workers = {int(read_run(out, i).worker.split("@")[0]) for i in finished_runs(out)}
+    process.kill()       # SIGKILL of the campaign this test started
+    process.communicate(timeout=60)
+    assert all(gone(worker, timeout=10.0) for worker in workers)
+
+
+def damage(path: Path, how: str) -> None:
+    """Truncate a run file to half, or flip one byte in the middle of its data."""
+    data = bytearray(path.read_bytes())
+    if how == "truncated":
+        path.write_bytes(data[:len(data) // 2])
+    else:
+        data[len(data) // 3] ^= 0xFF
+        path.write_bytes(bytes(data))
+
+
+def test_report_skips_damaged_runs_and_resume_re_runs_them(gusty_ssp, reference, tmp_path):
+    out = tmp_path / "damaged"
+    shutil.copytree(reference, out)
+    damage(run_path(out, 2), "truncated")
+    damage(run_path(out, 5), "flipped")
+    completed = subprocess.run(cli("report", str(out)), capture_output=True, text=True,
+                               timeout=120)
+    assert completed.returncode == 0, completed.stderr
+    assert "skipped run 2: run_00002.npz" in completed.stdout
+    assert "skipped run 5: run_00005.npz" in completed.stdout
+    outcome = run_campaign(SystemSource.from_path(gusty_ssp), out, CampaignSettings(),
+                           Execution(workers=1, progress=False), resume=True)
+    assert sorted(outcome.damaged) == [2, 5] and outcome.executed == 2
     assert_same_runs(out, reference)
 
 

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from fmpy.ssp.ssd import read_ssd
 from fmpy.validation import validate_fmu
+from state_restore import assert_restores_identically
 
 from altfusion.cosim import (
     ComponentSpec,
@@ -149,13 +150,7 @@ def test_fmu_state_save_and_restore_continue_bit_identically(fmus):
                              "gust_std": 1.0, "wind_mean": 5.0, "seed": 11}, 0.1, 0.0, 100.0)
         instance.exit_initialization()
         advance(0, 50)
-        state = instance.get_state()
-        serialized = instance.fmu.serializeFMUstate(state)
-        first = advance(50, 100)
-        instance.set_state(state)
-        assert advance(50, 100) == first
-        instance.set_state(instance.fmu.deSerializeFMUstate(serialized))
-        assert advance(50, 100) == first
+        assert_restores_identically(instance, lambda: advance(50, 100))
     finally:
         instance.free()
 

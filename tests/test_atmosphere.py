@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from altfusion.physics.atmosphere import Atmosphere, AtmosphereParams
+from altfusion.physics.atmosphere import H_MAX, H_MIN, Atmosphere, AtmosphereParams
 from altfusion.physics.barometric import height_from_pressure, pressure_at
 
 # ICAO standard atmosphere (geopotential altitude): h m, p Pa, T K, rho kg/m³.
@@ -31,6 +31,9 @@ def test_matches_the_isa_table(h, p, T, rho):
 
 
 def test_barometric_height_inverts_pressure():
+    """height_from_pressure inverts pressure_at exactly; rounding of a few ε in p moves the
+    height by the scale height R·T/g ≈ 8.6 km times that: ~1e-11 m (bound 1e-7 m over the
+    troposphere; 1e-9 m for the isothermal case at 500 m)."""
     for h in np.linspace(-300.0, 11000.0, 50):
         p = pressure_at(h, 100500.0, 295.0, -0.0058)
         assert height_from_pressure(p, 100500.0, 295.0, -0.0058) == pytest.approx(h, abs=1e-7)
@@ -103,3 +106,12 @@ def test_terrain_profile_is_interpolated_in_time():
     for n in range(5):
         atmosphere.do_step(float(n), 1.0)
     assert atmosphere.terrain_h == 150.0
+
+
+@pytest.mark.parametrize("h", [float("nan"), float("inf"), -1e308, H_MAX * 1.01, H_MIN - 1.0])
+def test_an_altitude_outside_the_model_is_refused_not_a_nan(h):
+    atmosphere = Atmosphere()
+    atmosphere.h = h
+    with pytest.raises(ValueError, match="input h = .* outside the model's range"):
+        atmosphere.do_step(0.0, 0.01)
+    assert math.isfinite(atmosphere.p_static)

@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
+from altfusion.atomic import atomic_write
 from altfusion.cosim.results import Results
 from altfusion.montecarlo.storage import (
     RunRecord,
-    atomic_write,
     failed_runs,
     finished_runs,
     read_run,

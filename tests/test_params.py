@@ -27,7 +27,8 @@ def test_infos_carry_unit_description_and_bounds():
 @pytest.mark.parametrize(("field", "value", "message"), [
     ("mass", 0.0, "'mass' = 0.0: must be > 0"),
     ("sigma", -1.0, "'sigma' = -1.0: must be >= 0.0"),
-    ("sigma", float("nan"), "'sigma' = nan: must not be NaN"),
+    ("sigma", float("nan"), "'sigma' = nan: must be finite"),
+    ("sigma", float("inf"), "'sigma' = inf: must be finite"),
     ("count", 6, "'count' = 6: must be <= 5"),
     ("count", 2.5, "'count' = 2.5: must be an integer"),
     ("name", 3, "'name' = 3: must be a string"),

@@ -29,6 +29,7 @@ def test_yang2020_phases_as_in_seed_003():
     assert profile.reference(270.0)[2] == -0.2
     assert profile.reference(330.0)[1:] == (-12.0, 0.0)
     assert profile.reference(390.0)[2] == 0.2
+    # the landing is the sum of the phases' closed forms: rounding of 1440 m terms, ~1e-13 m
     assert profile.reference(420.0)[:2] == pytest.approx((0.0, 0.0), abs=1e-9)
 
 
@@ -48,7 +49,9 @@ def test_unknown_profile_is_rejected_by_name():
        t=st.floats(min_value=0.5, max_value=1500.0))
 def test_profiles_are_consistent_h_vz_az(name, t):
     """vz is the time derivative of h and az that of vz (central differences; at a kink the
-    difference is the mean of both sides, hence the allowance of the jump across it)."""
+    difference is the mean of both sides, hence the allowance of the jump across it). The
+    1e-6 floor is above a central difference's rounding, ε·|h| / 2d ≈ 2.2e-16 × 1.1e4 m /
+    2e-4 s ≈ 1e-8 m/s (h up to the 10,894 m of the hajiyev profile)."""
     profile = make_profile(name)
     d = 1e-4
     (h1, v1, a1), (h2, v2, a2) = profile.reference(t - d), profile.reference(t + d)
@@ -88,3 +91,16 @@ def test_controller_tracks_every_profile_within_its_bound(name):
         controller.do_step(n * 0.01, 0.01)
         worst = max(worst, abs(plant.h - controller.h_ref))
     assert worst < BOUNDS[name]
+
+
+def test_absurd_feedback_gives_a_bounded_thrust_or_an_error_never_nan():
+    """A finite but absurd altitude is clipped by the saturation; kp (1e300) x error (-1e308)
+    plus ki x integral (+inf) is inf - inf: refused."""
+    controller = FlightController()
+    controller.h_fb = 1e308
+    controller.do_step(0.0, controller.dt)
+    assert controller.thrust == 0.0
+    wild = FlightController(FlightControllerParams(kp=1e300, ki=1e300))
+    wild.h_fb, wild.vz_fb = 1e308, -1e308
+    with pytest.raises(ValueError, match="gives no thrust"):
+        wild.do_step(0.0, wild.dt)

@@ -56,3 +56,11 @@ def test_advance_rejects_a_wrong_step_or_time():
 def test_step_size_must_be_positive():
     with pytest.raises(ParameterError, match="'step_size' = 0.0"):
         TickClock(0.0)
+
+
+@pytest.mark.parametrize("bad", [float("nan"), float("inf")])
+def test_a_non_finite_step_or_duration_is_refused_naming_it(bad):
+    with pytest.raises(ParameterError, match="'step_size' = .*must be finite"):
+        TickClock(bad)
+    with pytest.raises(ParameterError, match="'stop_time' = .*must be finite"):
+        TickClock(0.01).ticks_in(bad, "stop_time")

@@ -4,7 +4,12 @@ import math
 
 import pytest
 
-from altfusion.physics.vertical_dynamics import VerticalDynamics, VerticalDynamicsParams
+from altfusion.errors import ParameterError
+from altfusion.physics.vertical_dynamics import (
+    MAX_SUBSTEPS,
+    VerticalDynamics,
+    VerticalDynamicsParams,
+)
 
 
 def fly(model: VerticalDynamics, thrust: float, duration: float) -> VerticalDynamics:
@@ -17,6 +22,11 @@ def fly(model: VerticalDynamics, thrust: float, duration: float) -> VerticalDyna
 
 @pytest.mark.parametrize("step", [0.001, 0.01, 0.2, 1.0])
 def test_constant_thrust_without_drag_is_a_parabola(step):
+    """RK4 is exact for a constant acceleration (h is a quadratic in t), so only rounding
+    remains. It accumulates as a random walk over the n ≤ 20000 sub-steps (1 ms steps over
+    20 s): √n·ε·|h| ≈ 141 × 2.2e-16 × 260 m ≈ 8e-12 m (bound 1e-9 m), and
+    ≈ 141 × 2.2e-16 × 13 m/s ≈ 4e-13 m/s for vz (bound 1e-11 m/s); az is one evaluation,
+    exact to ε·0.5 (bound 1e-12 m/s²)."""
     params = VerticalDynamicsParams(mass=2.0, drag_coefficient=0.0, h0=100.0, vz0=3.0)
     thrust = 2.0 * (9.80665 + 0.5)  # net acceleration +0.5 m/s²
     model = fly(VerticalDynamics(params, step_size=step), thrust, 20.0)
@@ -61,3 +71,20 @@ def test_non_finite_thrust_is_an_error_not_a_nan():
     model.thrust = float("nan")
     with pytest.raises(ValueError, match="thrust = nan"):
         model.do_step(0.0, 0.01)
+
+
+def test_a_thrust_driving_the_state_non_finite_is_refused_and_the_state_kept():
+    """1e308 N on 1.5 kg overflows the RK4 stages to inf: the step fails, the state stays."""
+    model = VerticalDynamics()
+    model.thrust = 1e308
+    with pytest.raises(ValueError, match="thrust = 1e\\+308 N drives the state non-finite"):
+        model.do_step(0.0, 0.01)
+    assert (model.h, model.vz) == (0.0, 0.0)
+
+
+def test_a_sub_step_needing_unbounded_work_is_refused_naming_the_parameter():
+    """1e-300 s would need 1e298 RK4 sub-steps per 0.01 s step (the run would hang)."""
+    with pytest.raises(ParameterError, match="'max_substep' = 1e-300"):
+        VerticalDynamics(VerticalDynamicsParams(max_substep=1e-300))
+    bound = VerticalDynamics(VerticalDynamicsParams(max_substep=0.01 / MAX_SUBSTEPS))
+    assert bound._substeps == MAX_SUBSTEPS

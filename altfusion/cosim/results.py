@@ -1,10 +1,13 @@
 """Recorded co-simulation results: time series by 'component.variable', with units and CSV."""
 
 import csv
+import io
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+
+from altfusion.atomic import write_text
 
 
 @dataclass
@@ -25,17 +28,16 @@ class Results:
         return f"{name} [{unit}]" if unit else name
 
     def to_csv(self, path: Path) -> Path:
-        """Write 'time [s]' and every column, units in the header; return the path."""
-        path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
+        """Write 'time [s]' and every column, units in the header, atomically (see
+        :mod:`altfusion.atomic`); return the path."""
         names = list(self.columns)
         data = np.column_stack([self.time] + [self.columns[n] for n in names])
-        with open(path, "w", newline="") as handle:
-            writer = csv.writer(handle)
-            writer.writerow(["time [s]"] + [self.header(n) for n in names])
-            for row in data:
-                writer.writerow([repr(float(v)) for v in row])
-        return path
+        text = io.StringIO(newline="")
+        writer = csv.writer(text)
+        writer.writerow(["time [s]"] + [self.header(n) for n in names])
+        for row in data:
+            writer.writerow([repr(float(v)) for v in row])
+        return write_text(Path(path), text.getvalue())
 
     @classmethod
     def from_csv(cls, path: Path) -> "Results":

@@ -136,6 +136,14 @@ class _Stepped:
         self._written = [None] * len(self._writers)
 
 
+class RunFailedError(CosimError):
+    """A component failed during the run; ``results`` holds the rows recorded before."""
+
+    def __init__(self, message: str, results: Results):
+        super().__init__(message)
+        self.results = results
+
+
 class Simulation:
     """A system ready to run, repeatedly: instances are created once and reset between runs."""
 
@@ -292,13 +300,25 @@ class Simulation:
         self._initialize(stop, overrides)
         rows = steps // every + 1
         data = np.empty((rows, len(self._recorded)))
-        times = np.empty(rows)
+        times = np.full(rows, np.nan)
         self._record(data, times, 0, 0)
+        try:
+            self._loop(steps, every, data, times)
+        except Exception as error:
+            recorded = int(np.isfinite(times).sum())    # rows are recorded in order
+            partial = self._results(times[:recorded], data[:recorded])
+            raise RunFailedError(f"{error}", partial) from error
+        for component in self._components:
+            component.instance.terminate()
+        return self._results(times, data)
+
+    def _loop(self, steps: int, every: int, data: np.ndarray, times: np.ndarray) -> None:
+        """The stepping loop of :meth:`run`, recording every ``every`` base steps."""
         tick_time = self.base.time
+        t_previous = tick_time(0)
         latching = [(c.ratio, c.latch) for c in self._components if c.delayed]
         stepping = [(c.ratio, c.apply_inputs, c.step, c._linked_reads) for c in self._order]
         recorded_only = [c.refresh_recorded for c in self._components if c._recorded_reads]
-        t_previous = tick_time(0)
         for n in range(steps):
             for ratio, latch in latching:
                 if n % ratio == 0:
@@ -318,8 +338,8 @@ class Simulation:
                 for refresh_recorded in recorded_only:
                     refresh_recorded()
                 self._record(data, times, end // every, end)
-        for component in self._components:
-            component.instance.terminate()
+
+    def _results(self, times: np.ndarray, data: np.ndarray) -> Results:
         columns = {path: data[:, i] for i, (path, *_rest) in enumerate(self._recorded)}
         units = {path: unit for path, *_rest, unit in self._recorded}
         warnings = {c.name: list(c.instance.warnings) for c in self._components

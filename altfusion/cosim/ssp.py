@@ -20,6 +20,7 @@ from fmpy.ssp.ssd import read_ssd
 from lxml import etree
 
 from altfusion.cosim.system import ComponentSpec, Connection, Metric, SystemSpec
+from altfusion.errors import UsageError
 from altfusion.units import BASE_UNITS
 from altfusion.version import CORE_VERSION
 
@@ -158,12 +159,17 @@ class LoadedSystem:
 def read_ssp(path: Path) -> LoadedSystem:
     """Read and schema-validate an SSP archive written by :func:`write_ssp`."""
     path = Path(path)
-    ssd = read_ssd(str(path), validate=True)
-    with zipfile.ZipFile(path) as archive:
-        root = etree.fromstring(archive.read("SystemStructure.ssd"))
-        folder = tempfile.TemporaryDirectory(prefix="altfusion_ssp_")
-        archive.extractall(folder.name, [n for n in archive.namelist()
-                                         if n.startswith("resources/")])
+    if not path.is_file():
+        raise UsageError(f"{path}: no such file")
+    try:
+        ssd = read_ssd(str(path), validate=True)
+        with zipfile.ZipFile(path) as archive:
+            root = etree.fromstring(archive.read("SystemStructure.ssd"))
+            folder = tempfile.TemporaryDirectory(prefix="altfusion_ssp_")
+            archive.extractall(folder.name, [n for n in archive.namelist()
+                                             if n.startswith("resources/")])
+    except (OSError, zipfile.BadZipFile, KeyError, etree.LxmlError, ValueError) as error:
+        raise UsageError(f"{path}: not a valid SSP archive ({error})") from error
     system = ssd.system
     components, fmu_paths = [], {}
     for element in system.elements:
@@ -177,9 +183,12 @@ def read_ssp(path: Path) -> LoadedSystem:
         if hint is not None:
             step = float(hint.get("value"))
         if step is None:
-            raise ValueError(f"{path}: component {element.name} has no step size")
+            raise UsageError(f"{path}: component {element.name} has no step size")
         fmu = Path(element.source).stem
         fmu_paths[fmu] = Path(folder.name) / element.source
+        if not fmu_paths[fmu].is_file():
+            raise UsageError(f"{path}: component {element.name}: FMU {element.source} "
+                             f"missing from the archive")
         components.append(ComponentSpec(element.name, fmu, float(step), params))
     connections = tuple(
         Connection(f"{c.startElement}.{c.startConnector}", f"{c.endElement}.{c.endConnector}")

@@ -31,7 +31,13 @@ from altfusion.montecarlo.statistics import (
     rms_chi2_bounds,
     root_interval,
 )
-from altfusion.montecarlo.storage import failed_runs, finished_runs, read_manifest, read_run
+from altfusion.montecarlo.storage import (
+    DamagedRunError,
+    failed_runs,
+    finished_runs,
+    load_run,
+    read_manifest,
+)
 
 CONFIDENCE = 0.95
 
@@ -107,6 +113,8 @@ class CampaignStatistics:
     signals: list[SignalEnvelope]
     seeds: list[dict[str, int]] = field(default_factory=list)
     confidence: float = CONFIDENCE
+    skipped: dict[int, str] = field(default_factory=dict)
+    """Stored runs left out because their file is damaged, with what is wrong."""
 
     @property
     def expected_runs(self) -> int:
@@ -165,16 +173,22 @@ def aggregate(out: Path, confidence: float = CONFIDENCE) -> CampaignStatistics:
     """Statistics of the finished runs of the campaign in ``out``."""
     out = Path(out)
     manifest = read_manifest(out)
-    runs = [index for index in finished_runs(out) if index < manifest["runs"]]
-    if not runs:
-        raise CampaignError(f"{out} holds no finished runs")
+    stored = [index for index in finished_runs(out) if index < manifest["runs"]]
     metrics = [Metric(**m) for m in manifest["metrics"]]
-    time = read_run(out, runs[0]).results.time
-    accumulators = [_MetricAccumulator(metric, time.size) for metric in metrics]
+    accumulators: list[_MetricAccumulator] = []
     envelopes: dict[str, tuple[_Welford, np.ndarray, np.ndarray, str]] = {}
-    seeds = []
-    for index in runs:
-        record = read_run(out, index)
+    seeds, runs, skipped = [], [], {}
+    time = np.empty(0)
+    for index in stored:
+        try:
+            record = load_run(out, index)
+        except DamagedRunError as error:
+            skipped[index] = str(error)
+            continue
+        if not runs:
+            time = record.results.time
+            accumulators = [_MetricAccumulator(metric, time.size) for metric in metrics]
+        runs.append(index)
         results = record.results
         if not np.array_equal(results.time, time):
             raise CampaignError(f"run {index} has other output times than run {runs[0]}")
@@ -192,9 +206,12 @@ def aggregate(out: Path, confidence: float = CONFIDENCE) -> CampaignStatistics:
             welford.add(values)
             np.minimum(low, values, out=low)
             np.maximum(high, values, out=high)
+    if not runs:
+        damaged = f" ({len(skipped)} damaged run files skipped)" if skipped else ""
+        raise CampaignError(f"{out} holds no finished runs{damaged}")
     signals = [SignalEnvelope(name, unit, w.mean, w.std(), low, high)
                for name, (w, low, high, unit) in envelopes.items()]
     failed = {i: m for i, m in failed_runs(out).items() if i < manifest["runs"]}
     return CampaignStatistics(manifest, runs, failed, time,
                               [a.result(confidence) for a in accumulators], signals, seeds,
-                              confidence)
+                              confidence, skipped)

@@ -15,7 +15,7 @@ SHOWN_FAILURES = 5
 def _parameters(system: Path, settings: list[str]) -> dict[str, Any] | None:
     if not settings:
         return None
-    from altfusion.cli import parse_settings
+    from altfusion.cosim.settings import parse_settings
     from altfusion.cosim.ssp import read_ssp
 
     return parse_settings(read_ssp(system), settings)
@@ -45,6 +45,8 @@ def _report_outcome(outcome, resume_hint: str) -> int:
     print(f"{len(outcome.finished)}/{outcome.runs} runs finished in {outcome.out} "
           f"({outcome.executed} executed in this session on "
           f"{outcome.backend or 'no workers'}, {outcome.elapsed:.1f} s)")
+    for index, reason in sorted(outcome.damaged.items()):
+        print(f"run {index} was damaged, re-run: {reason}")
     for index, message in list(sorted(outcome.failed.items()))[:SHOWN_FAILURES]:
         print(f"run {index} failed: {_headline(message)}", file=sys.stderr)
     if len(outcome.failed) > SHOWN_FAILURES:
@@ -103,6 +105,8 @@ def command_report(args: argparse.Namespace) -> int:
     from altfusion.montecarlo.tables import format_statistics
 
     report = write_report(args.results)
+    for index, reason in sorted(report.statistics.skipped.items()):
+        print(f"skipped run {index}: {reason} (altfusion mc --resume re-runs it)")
     print(format_statistics(report.statistics))
     print(f"wrote {report.html}, {report.summary} and {len(report.pngs)} plots")
     return 0

@@ -13,6 +13,7 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
+from altfusion.atomic import write_text
 from altfusion.cosim.ssp import read_ssp
 from altfusion.montecarlo import plots
 from altfusion.montecarlo.aggregation import CampaignStatistics, aggregate
@@ -118,7 +119,7 @@ def write_comparison(out: Path, estimators: list[str]) -> Path:
     pngs = []
     if series:
         pngs.append(plots.plot_rms_versus_time(first, out / "compare_rms_vs_time.png", series))
-    (out / "compare.json").write_text(json.dumps(
+    write_text(out / "compare.json", json.dumps(
         {name: statistics_json(s) for name, s in results}, indent=2) + "\n")
     links = "".join(f'<li><a href="{esc(folder_name(n))}/report.html">{esc(n)}</a>'
                     f"</li>" for n, _ in results)
@@ -131,9 +132,9 @@ def write_comparison(out: Path, estimators: list[str]) -> Path:
             + f'<p class="note">{100 * first.confidence:g} % confidence intervals.</p>'
             + "".join(image(p) for p in pngs) + f"<h2>Reports</h2><ul>{links}</ul>")
     page = out / "compare.html"
-    page.write_text(f"<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>"
-                    f"{esc(system['name'])} comparison</title><style>{STYLE}</style></head>"
-                    f"<body>\n{body}\n</body></html>\n")
+    write_text(page, f"<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>"
+               f"{esc(system['name'])} comparison</title><style>{STYLE}</style></head>"
+               f"<body>\n{body}\n</body></html>\n")
     return page
 
 

@@ -15,6 +15,7 @@ from altfusion.montecarlo.campaign import CampaignTask, build_manifest, check_re
 from altfusion.montecarlo.progress import Progress
 from altfusion.montecarlo.source import CampaignError, SystemSource
 from altfusion.montecarlo.storage import (
+    damaged_runs,
     failed_runs,
     finished_runs,
     has_manifest,
@@ -78,6 +79,8 @@ class CampaignOutcome:
     failing: bool = False
     """It stopped because the system fails (resuming unchanged would fail again)."""
     missing: list[int] = field(default_factory=list)
+    damaged: dict[int, str] = field(default_factory=dict)
+    """Stored runs found damaged by ``--resume`` (re-run), with what was wrong."""
 
     @property
     def complete(self) -> bool:
@@ -113,10 +116,11 @@ def run_campaign(source: SystemSource, out: Path, settings: CampaignSettings,
     execution = execution or Execution()
     task, manifest = prepare_campaign(source, out, settings, resume)
     runs = manifest["runs"]
-    done = set(finished_runs(out))
+    damaged = damaged_runs(out) if resume else {}
+    done = set(finished_runs(out)) - set(damaged)
     todo = [index for index in range(runs) if index not in done]
     start = time.monotonic()
-    outcome = CampaignOutcome(out, runs, sorted(done), {}, 0, 0.0)
+    outcome = CampaignOutcome(out, runs, sorted(done), {}, 0, 0.0, damaged=damaged)
     if todo:
         outcome = _execute(task, out, todo, outcome, execution)
     outcome.finished = finished_runs(out)

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from altfusion.atomic import write_text
 from altfusion.montecarlo import plots
 from altfusion.montecarlo.aggregation import CampaignStatistics, aggregate
 from altfusion.montecarlo.tables import HEADER, confidence_note, metric_row, statistics_json
@@ -75,11 +76,11 @@ def write_report(out: Path) -> Report:
     statistics = aggregate(out)
     pngs = write_plots(statistics, out)
     summary = out / "summary.json"
-    summary.write_text(json.dumps(statistics_json(statistics), indent=2) + "\n")
+    write_text(summary, json.dumps(statistics_json(statistics), indent=2) + "\n")
     if statistics.metrics:
         write_profiles_csv(statistics, out / "rms_vs_time.csv")
     page = out / "report.html"
-    page.write_text(render(statistics, pngs))
+    write_text(page, render(statistics, pngs))
     return Report(page, pngs, summary, statistics)
 
 

@@ -10,14 +10,14 @@ import json
 import os
 import re
 import socket
-import tempfile
-from collections.abc import Callable
+import zipfile
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO, Any
+from typing import Any
 
 import numpy as np
 
+from altfusion.atomic import atomic_write, write_text
 from altfusion.cosim.results import Results
 
 MANIFEST = "manifest.json"
@@ -53,25 +53,6 @@ def resident_memory() -> int | None:
     except (OSError, ValueError, IndexError):
         return None
     return pages * os.sysconf("SC_PAGE_SIZE")
-
-
-def atomic_write(path: Path, write: Callable[[IO[bytes]], None]) -> Path:
-    """Write ``path`` through ``write(handle)`` to a temporary file, then rename it into place."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    descriptor, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.",
-                                             suffix=".tmp")
-    try:
-        with os.fdopen(descriptor, "wb") as handle:
-            write(handle)
-            handle.flush()
-            os.fsync(handle.fileno())
-        os.chmod(temporary, 0o644)
-        os.replace(temporary, path)
-    except BaseException:
-        Path(temporary).unlink(missing_ok=True)
-        raise
-    return path
 
 
 def run_path(out: Path, index: int) -> Path:
@@ -111,8 +92,42 @@ def read_run(out: Path, index: int) -> RunRecord:
                      meta["worker_rss"])
 
 
+class DamagedRunError(ValueError):
+    """A stored run file that cannot be read back whole (truncated, corrupted, keys missing)."""
+
+
+def load_run(out: Path, index: int) -> RunRecord:
+    """:func:`read_run`, checked: every array read (the zip's CRC checked) and consistent;
+    a DamagedRunError says what is wrong."""
+    path = run_path(out, index)
+    try:
+        record = read_run(out, index)
+    except KeyError as error:
+        raise DamagedRunError(f"{path.name}: missing {error.args[0]}") from error
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as error:
+        raise DamagedRunError(f"{path.name}: {type(error).__name__}: {error}") from error
+    rows = {values.shape for values in record.results.columns.values()}
+    if record.index != index or rows - {record.results.time.shape}:
+        raise DamagedRunError(f"{path.name}: inconsistent content (index {record.index}, "
+                              f"column shapes {sorted(rows)} vs time "
+                              f"{record.results.time.shape})")
+    return record
+
+
+def damaged_runs(out: Path) -> dict[int, str]:
+    """Stored run index -> what is wrong with its file, for the runs that fail :func:`load_run`
+    (each file is read whole: about 1 ms per run of 10^4 rows)."""
+    damaged = {}
+    for index in finished_runs(out):
+        try:
+            load_run(out, index)
+        except DamagedRunError as error:
+            damaged[index] = str(error)
+    return damaged
+
+
 def write_failure(out: Path, index: int, message: str) -> Path:
-    return atomic_write(failure_path(out, index), lambda handle: handle.write(message.encode()))
+    return write_text(failure_path(out, index), message)
 
 
 def _indices(out: Path, pattern: re.Pattern) -> list[int]:
@@ -136,7 +151,7 @@ def failed_runs(out: Path) -> dict[int, str]:
 
 def write_manifest(out: Path, manifest: dict[str, Any]) -> Path:
     text = json.dumps(manifest, indent=2, sort_keys=True) + "\n"
-    return atomic_write(Path(out) / MANIFEST, lambda handle: handle.write(text.encode()))
+    return write_text(Path(out) / MANIFEST, text)
 
 
 def read_manifest(out: Path) -> dict[str, Any]:

@@ -11,6 +11,7 @@ lock (start Dask workers with one thread each and one worker process per core).
 """
 
 import contextlib
+import os
 import signal
 import threading
 import time
@@ -45,13 +46,28 @@ def simulation_for(source: SystemSource) -> Simulation:
     return cached[1]
 
 
+PARENT_POLL = 1.0
+"""Seconds between two checks that the parent process lives."""
+
+
+def _end_with_parent(parent: int) -> None:
+    """Exit when the parent process is gone (killed with -9 it cannot stop its workers): it
+    is gone when this process's parent id changed (re-parented to init or a subreaper)."""
+    while os.getppid() == parent:
+        time.sleep(PARENT_POLL)
+    os._exit(1)
+
+
 def initialize_worker(source: SystemSource) -> None:
     """Initializer of local worker processes: build the simulation before the first run.
 
     Workers ignore Ctrl-C: the parent process decides what happens to an interrupted
-    campaign (it keeps every finished run and stops the workers).
+    campaign (it keeps every finished run and stops the workers). A watchdog thread ends the
+    worker within ``PARENT_POLL`` s of its parent's death.
     """
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    threading.Thread(target=_end_with_parent, args=(os.getppid(),), daemon=True,
+                     name="parent-watchdog").start()
     with contextlib.suppress(Exception):  # each run of this worker reports the error
         simulation_for(source)
 

@@ -12,6 +12,9 @@ tropopause) whose sea-level pressure p0, temperature T0 and lapse rate change wi
 
 A barometer calibrated at launch and flown in this atmosphere shows the scale-factor and bias
 errors of seed 000 eqs. (2)-(4) without them being injected.
+
+Guard: the input altitude ``h`` is refused (the step fails naming it) when it is NaN or outside
+[``H_MIN``, ``H_MAX``], so no output is NaN while the status is OK.
 """
 
 import math
@@ -58,6 +61,13 @@ class AtmosphereParams:
     seed: int = param(0, None, "Seed of this component's random streams", min=0)
 
 
+H_MIN = -1000.0
+"""Lowest input altitude accepted, m (below the Dead Sea shore, -430 m)."""
+H_MAX = 50_000.0
+"""Highest input altitude accepted, m (the stratopause: above it the isothermal layer is
+no longer a model of anything)."""
+
+
 class Atmosphere(Component):
     """Time-varying lapse-rate atmosphere evaluated at the vehicle's true altitude."""
 
@@ -87,6 +97,9 @@ class Atmosphere(Component):
 
     def update(self) -> None:
         p = self.params
+        if not H_MIN <= self.h <= H_MAX:    # also refuses NaN
+            raise ValueError(f"input h = {self.h!r} m outside the model's range "
+                             f"[{H_MIN:g}, {H_MAX:g}] m")
         if p.lapse_rate_std > 0 and self.clock.ticks % self._lapse_ticks == 0:
             self.lapse_rate_actual = p.lapse_rate + p.lapse_rate_std * (
                 self._lapse_rng.standard_normal()

@@ -8,6 +8,10 @@ from the pole-placement design on the linearised VerticalDynamics made with pyth
 :mod:`altfusion.physics.controller_design` (closed-loop poles, margins: docs/controller_design.md).
 The altitude feedback ``h_fb``/``vz_fb`` is an input: a system closes the loop on truth or on an
 estimator's output. The integrator stops while the thrust saturates (anti-windup).
+
+Guards: non-finite feedback is refused (the step fails naming it); absurd finite feedback is
+bounded by the saturation (an infinite command is clipped to 0 or ``thrust_max``), and feedback
+whose command is undefined (inf - inf) is refused.
 """
 
 import math
@@ -82,5 +86,8 @@ class FlightController(Component):
             + p.ki * integral
         )
         thrust = p.mass * (p.gravity + accel) + p.drag_coefficient * self.vz_ref * abs(self.vz_ref)
+        if math.isnan(thrust):      # inf - inf from absurd feedback; +-inf is clipped below
+            raise ValueError(f"feedback h_fb = {self.h_fb!r}, vz_fb = {self.vz_fb!r} gives "
+                             f"no thrust")
         clipped = min(max(thrust, 0.0), p.thrust_max)
         return clipped, clipped != thrust

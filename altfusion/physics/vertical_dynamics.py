@@ -9,6 +9,11 @@ result is accurate for any communication step. The vehicle rests on the ground a
 and cannot sink below it. Outputs are the state at the end of the step; ``az`` is the
 acceleration at that instant under the thrust held over the step, so no output depends on the
 thrust value set for the next step (no direct feedthrough).
+
+Guards: a non-finite thrust is refused, and so is a thrust that drives the state non-finite
+(for example 1e308 N: the step fails with a message naming the input and the state is kept);
+``max_substep`` is refused when a step would need more than ``MAX_SUBSTEPS`` sub-steps, so no
+parameter can make a step run unboundedly long.
 """
 
 import math
@@ -19,6 +24,9 @@ from altfusion.constants import G0
 from altfusion.errors import ParameterError
 from altfusion.params import param
 from altfusion.timegrid import TickClock
+
+MAX_SUBSTEPS = 10_000
+"""Most RK4 sub-steps per communication step (about 20 ms of Python per step)."""
 
 
 @dataclass(frozen=True)
@@ -50,6 +58,10 @@ class VerticalDynamics(Component):
         if p.h0 < p.ground_h:
             raise ParameterError("h0", p.h0, f"is below ground_h = {p.ground_h}")
         self._substeps = max(1, math.ceil(clock.step_size / p.max_substep - 1e-9))
+        if self._substeps > MAX_SUBSTEPS:
+            raise ParameterError("max_substep", p.max_substep,
+                                 f"needs {self._substeps} sub-steps per step of "
+                                 f"{clock.step_size} s; at most {MAX_SUBSTEPS}")
         self._substep = clock.step_size / self._substeps
 
     def reset(self) -> None:
@@ -83,8 +95,11 @@ class VerticalDynamics(Component):
             vz += dt / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
             if h <= self.params.ground_h and vz <= 0.0:
                 h, vz = self.params.ground_h, 0.0
-        self.h, self.vz = h, vz
-        self.az = accel(vz, thrust)
+        az = accel(vz, thrust)
+        if not (math.isfinite(h) and math.isfinite(vz) and math.isfinite(az)):
+            raise ValueError(f"input thrust = {thrust!r} N drives the state non-finite "
+                             f"(h = {h!r}, vz = {vz!r}); state kept at h = {self.h!r} m")
+        self.h, self.vz, self.az = h, vz, az
         self._settle_on_ground()
 
     def _settle_on_ground(self) -> None:

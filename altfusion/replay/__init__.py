@@ -8,9 +8,11 @@
 * :mod:`~altfusion.replay.component` - the ``LogReplay`` core behind the FMU;
 * :mod:`~altfusion.replay.compare`, :mod:`~altfusion.replay.plot` - comparing estimators with
   PX4 EKF2 after a replay run (numpy and matplotlib on recorded results);
+* :mod:`~altfusion.replay.system` - the replay systems (LogReplay feeding estimators, plain
+  :class:`~altfusion.cosim.system.SystemSpec` data) and their tuning; the catalog
+  (:mod:`altfusion.systems`) takes its replay systems from here;
 * :mod:`~altfusion.replay.run` - ``altfusion replay``: builds and runs the system through the
-  co-simulation runner (the replay systems and their tuning are in
-  :mod:`altfusion.systems.replay`).
+  co-simulation runner.
 
 The reader and the component are core code (numpy and pyulog) and import no FMI code; only
 ``run`` steps FMUs, and no FMU imports it.

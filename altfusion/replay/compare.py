@@ -17,6 +17,13 @@ have learnt the baro offset (the learning transients are in the plot, not in the
 * rangefinder, at each valid sample: h_est - laser_h (or radar_h), the ground's MSL height the
   estimate implies: over flat ground its std is the estimate's relative height error plus the
   terrain's roughness and the rangefinder's noise.
+* valid: the fraction of rows from ``start`` on where the estimate is valid: the estimator's
+  own ``h_valid`` where it has one, else where a height sample (baro, GPS with a fix, a valid
+  rangefinder sample) arrived at most ``AIDING_TIMEOUT`` s before. The replay stops where the
+  log's sensor data stop (:func:`~altfusion.replay.extract.extract_streams`).
+* diverged: flagged when, at some row from ``start`` on, the estimate is further than
+  ``DIVERGENCE_BOUND`` from every height sensor (GPS, and the baro moved into the GPS datum by
+  its median offset), or its ``h_std`` exceeds that bound.
 """
 
 from dataclasses import dataclass
@@ -30,6 +37,15 @@ SETTLE_TIME = 5.0
 """Offset-learning time after the first valid GPS sample, s: 25 GPS samples at 5 Hz bring the
 bias σ of the replay tuning to ~√(0.6² + 0.8²)/√25 = 0.2 m; Whang's alpha-beta filter, which
 starts before its bias is known, is settled after 1.6 s on the Auterion log."""
+
+
+AIDING_TIMEOUT = 5.0
+"""Seconds without a height sample after which an estimate without ``h_valid`` counts as
+invalid (PX4 EKF2's default aiding timeout)."""
+DIVERGENCE_BOUND = 50.0
+"""m: ten times a consumer GNSS receiver's vertical 1-sigma error (about 5 m) and far beyond
+the baro's scatter about the GPS datum (< 2 m on the bundled logs): an estimate this far from
+every height sensor, or this unsure, has left the flight."""
 
 
 @dataclass(frozen=True)
@@ -63,6 +79,9 @@ class EstimatorReport:
     baro_residual: Stats
     ground: Stats
     rejected: int | None
+    valid_fraction: float = float("nan")
+    diverged: str = ""
+    """Why the estimate counts as diverged ('' if it does not)."""
 
 
 def new_sample_rows(results: Results, prefix: str, valid: str | None = None) -> np.ndarray:
@@ -83,9 +102,56 @@ def settle_time(results: Results) -> float:
 def range_prefix(results: Results) -> str | None:
     """'laser' or 'radar', whichever delivered valid samples (None: no rangefinder)."""
     for prefix in ("laser", "radar"):
-        if len(new_sample_rows(results, prefix, f"{prefix}_valid")):
+        if f"{REPLAY}.{prefix}_count" in results.columns and \
+                len(new_sample_rows(results, prefix, f"{prefix}_valid")):
             return prefix
     return None
+
+
+def _held(results: Results, prefix: str, value: str, valid: str | None) -> np.ndarray:
+    """Per row, the last ``prefix`` sample's ``value`` (NaN before the first usable one)."""
+    rows = new_sample_rows(results, prefix, valid) if f"{REPLAY}.{prefix}_count" in \
+        results.columns else np.array([], dtype=int)
+    held = np.full(len(results.time), np.nan)
+    if len(rows):
+        index = np.searchsorted(rows, np.arange(len(results.time)), side="right") - 1
+        held[index >= 0] = results[f"{REPLAY}.{value}"][rows[index[index >= 0]]]
+    return held
+
+
+def aided_rows(results: Results) -> np.ndarray:
+    """Rows at which a height sample arrived at most ``AIDING_TIMEOUT`` s before."""
+    last = np.full(len(results.time), -np.inf)
+    for prefix, valid in (("baro", None), ("gps", "gps_fix"), ("laser", "laser_valid"),
+                          ("radar", "radar_valid")):
+        if f"{REPLAY}.{prefix}_count" not in results.columns:
+            continue
+        rows = new_sample_rows(results, prefix, valid)
+        if len(rows):
+            index = np.searchsorted(rows, np.arange(len(results.time)), side="right") - 1
+            seen = np.where(index >= 0, results.time[rows[np.maximum(index, 0)]], -np.inf)
+            last = np.maximum(last, seen)
+    return results.time - last <= AIDING_TIMEOUT
+
+
+def divergence(results: Results, h: np.ndarray, h_std: np.ndarray | None,
+               after: np.ndarray) -> str:
+    """Why ``h`` counts as diverged from ``after`` on ('' if it does not)."""
+    gps = _held(results, "gps", "gps_h", "gps_fix")
+    baro = _held(results, "baro", "baro_h", None)
+    both = np.isfinite(gps) & np.isfinite(baro)
+    offset = float(np.median(baro[both] - gps[both])) if both.any() else 0.0
+    distance = np.fmin(np.abs(h - gps), np.abs(h - (baro - offset)))
+    distance = np.where(np.isfinite(h), distance, np.inf)[after]
+    distance[np.isnan(distance)] = 0.0                  # no height sensor yet: nothing to say
+    if len(distance) and distance.max() > DIVERGENCE_BOUND:
+        worst = int(np.argmax(distance))
+        return (f"|h - sensors| {distance[worst]:.4g} m at "
+                f"{results.time[after][worst]:.1f} s")
+    if h_std is not None and len(h_std[after]) and not np.max(h_std[after]) <= \
+            DIVERGENCE_BOUND:
+        return f"h_std {np.max(h_std[after]):.4g} m"
+    return ""
 
 
 def compare(results: Results, estimate: str, name: str, start: float) -> EstimatorReport:
@@ -112,6 +178,9 @@ def compare(results: Results, estimate: str, name: str, start: float) -> Estimat
         rows = rows[after[rows]]
         ground = h[rows] - results[f"{REPLAY}.{prefix}_h"][rows]
     rejected = results.columns.get(f"{component}.n_rejected")
+    h_valid = results.columns.get(f"{component}.h_valid")
+    valid = h_valid > 0.5 if h_valid is not None else aided_rows(results)
+    h_std = results.columns.get(std_column) if std_column else None
     return EstimatorReport(
         name=name,
         vs_ekf=Stats.of(h[ekf] - results[f"{REPLAY}.ekf_h"][ekf]),
@@ -120,6 +189,8 @@ def compare(results: Results, estimate: str, name: str, start: float) -> Estimat
         baro_residual=Stats.of(results[f"{REPLAY}.baro_h"][baro] - h[baro]),
         ground=Stats.of(ground),
         rejected=int(rejected[-1]) if rejected is not None else None,
+        valid_fraction=float(np.mean(valid[after])) if after.any() else float("nan"),
+        diverged=divergence(results, h, h_std, after),
     )
 
 
@@ -144,7 +215,7 @@ def format_table(reports: list[EstimatorReport]) -> str:
     """The comparison as a plain-text table (m; NIS dimensionless)."""
     head = (f"{'estimate':<27}{'vs EKF2: RMS':>13}{'mean':>8}{'std':>7}{'max':>7}"
             f"{'GPS innov: mean':>17}{'std':>7}{'NIS':>7}{'baro-h: mean':>14}{'std':>7}"
-            f"{'h-range: std':>14}{'rejected':>10}")
+            f"{'h-range: std':>14}{'rejected':>10}{'valid':>7}  diverged")
     lines = [head, "-" * len(head)]
     for r in reports:
         rejected = "" if r.rejected is None else str(r.rejected)
@@ -152,5 +223,6 @@ def format_table(reports: list[EstimatorReport]) -> str:
             f"{r.name:<27}{r.vs_ekf.rms:13.3f}{r.vs_ekf.mean:8.3f}{r.vs_ekf.std:7.3f}"
             f"{r.vs_ekf.max_abs:7.3f}{r.gps_innovation.mean:17.3f}{r.gps_innovation.std:7.3f}"
             f"{r.nis:7.2f}{r.baro_residual.mean:14.3f}{r.baro_residual.std:7.3f}"
-            f"{r.ground.std:14.3f}{rejected:>10}")
+            f"{r.ground.std:14.3f}{rejected:>10}{r.valid_fraction:7.0%}  "
+            f"{r.diverged or 'no'}")
     return "\n".join(lines).replace("nan", "  -")

@@ -43,6 +43,7 @@ from altfusion.replay.streams import (
     drop_non_finite,
     find_gaps,
     hold_invalid,
+    outlier_stamps,
 )
 
 AIR_DATA = "vehicle_air_data"
@@ -52,6 +53,8 @@ ATTITUDE = "vehicle_attitude"
 RANGE = "distance_sensor"
 LOCAL_POSITION = "vehicle_local_position"
 TOPICS = (AIR_DATA, GNSS, IMU, ATTITUDE, RANGE, LOCAL_POSITION)
+EKF_PREFIX = "ekf"
+"""The stream of PX4's own estimate (a reference, not a sensor)."""
 
 MAX_SAMPLE_AGE_US = 1_000_000
 RELATIVE_TIMESTAMP_INVALID = 2_147_483_647
@@ -140,6 +143,9 @@ def finish_stream(prefix: str, topic: str, time_us: np.ndarray, start_us: int,
                      for p in found]
         valid = np.asarray(valid, dtype=bool) & finite
         keep = np.ones(len(time_us), dtype=bool)
+    plausible, found = outlier_stamps(time_us, topic)
+    problems += found
+    keep = keep & plausible
     time_us = np.asarray(time_us, dtype=np.int64)[keep]
     values = {n: np.asarray(v)[keep] for n, v in values.items()}
     order, found = clean_order(time_us, topic)
@@ -281,7 +287,7 @@ def range_streams(fields: Fields, attitude: Fields | None, start_us: int,
 def ekf_stream(fields: Fields, start_us: int) -> SampleStream | None:
     problems = missing_fields(fields, ("z", "vz", "ref_alt"), LOCAL_POSITION)
     if problems:
-        return SampleStream("ekf", LOCAL_POSITION, np.empty(0), {}, problems=problems)
+        return SampleStream(EKF_PREFIX, LOCAL_POSITION, np.empty(0), {}, problems=problems)
     time_us, problems = sample_times_us(fields, LOCAL_POSITION)
     valid = np.ones(len(time_us), dtype=bool)
     for flag in ("z_valid", "z_global"):
@@ -289,7 +295,7 @@ def ekf_stream(fields: Fields, start_us: int) -> SampleStream | None:
             valid &= np.asarray(fields[flag]) != 0
     values = {"ekf_h": np.asarray(fields["ref_alt"], dtype=float) - fields["z"],
               "ekf_vz": -np.asarray(fields["vz"], dtype=float)}
-    return finish_stream("ekf", LOCAL_POSITION, time_us, start_us, values, problems, valid,
+    return finish_stream(EKF_PREFIX, LOCAL_POSITION, time_us, start_us, values, problems, valid,
                          "ekf_valid")
 
 
@@ -301,17 +307,20 @@ def first_sample_us(topics: dict[str, Fields]) -> int | None:
             stamps, _ = accelerometer_times_us(fields)
         else:
             stamps, _ = sample_times_us(fields, topic)
+        stamps = stamps[outlier_stamps(stamps, topic)[0]]
         if len(stamps):
             earliest.append(int(np.min(stamps)))
     return min(earliest) if earliest else None
 
 
 def extract_streams(topics: dict[str, Fields], start_us: int | None = None,
-                    last_us: int | None = None, source: str = "") -> FlightLog:
+                    source: str = "") -> FlightLog:
     """The contract streams of a log given as ``topic -> field -> array``.
 
     Times are seconds after ``start_us`` (default: the earliest sample time, so no sample has a
-    negative time); the duration runs to ``last_us`` (default: the latest sample)."""
+    negative time); the duration runs to the last sensor sample (the replay stops where the
+    sensor data stop, whatever the log's last time stamp or EKF2's outputs say). Stamps far from
+    their neighbours are dropped (:func:`~altfusion.replay.streams.outlier_stamps`)."""
     problems = [LogProblem(t, "missing topic", "not in the log; its stream is not replayed")
                 for t in TOPICS if t not in topics]
     topics = {t: f for t, f in topics.items() if t in TOPICS and len(f.get("timestamp", ()))}
@@ -336,8 +345,6 @@ def extract_streams(topics: dict[str, Fields], start_us: int | None = None,
     if LOCAL_POSITION in topics:
         streams.append(ekf_stream(topics[LOCAL_POSITION], start_us))
     by_prefix = {s.prefix: s for s in streams if s is not None}
-    ends = [s.time[-1] for s in by_prefix.values() if len(s)]
+    ends = [s.time[-1] for p, s in by_prefix.items() if len(s) and p != EKF_PREFIX]
     duration = max(ends, default=0.0)
-    if last_us is not None:
-        duration = max(duration, (last_us - start_us) / 1e6)
     return FlightLog(start_us, duration, by_prefix, problems, source)

@@ -9,6 +9,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from altfusion.atomic import save_figure  # noqa: E402
 from altfusion.cosim.results import Results  # noqa: E402
 from altfusion.replay.compare import REPLAY, new_sample_rows, range_prefix  # noqa: E402
 
@@ -28,7 +29,8 @@ def plot_replay(results: Results, estimators: list[str], path: Path, title: str,
     ekf_t, ekf_h = _samples(results, "ekf", "ekf_h", "ekf_valid")
     gps_t, gps_h = _samples(results, "gps", "gps_h", "gps_fix")
     baro_t, baro_h = _samples(results, "baro", "baro_h")
-    offset = float(np.median(np.interp(gps_t, baro_t, baro_h) - gps_h)) if len(gps_t) else 0.0
+    offset = (float(np.median(np.interp(gps_t, baro_t, baro_h) - gps_h))
+              if len(gps_t) and len(baro_t) else 0.0)
     heights = axes[0]
     heights.plot(gps_t, gps_h, ".", color="0.45", markersize=3, label="GPS (raw)")
     heights.plot(baro_t, baro_h - offset, "x", color="0.7", markersize=3,
@@ -75,6 +77,6 @@ def plot_replay(results: Results, estimators: list[str], path: Path, title: str,
     fig.tight_layout()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=100)
+    save_figure(fig, path, dpi=100)
     plt.close(fig)
     return path

@@ -3,7 +3,7 @@
 This is co-simulation-level code (it steps FMUs through fmpy); the FMUs themselves never
 import it. Each estimator gets the inputs its FMU declares (read from its modelDescription),
 each connected to the LogReplay output of the same name, and the replay tuning of
-:mod:`altfusion.systems.replay` unless ``paper_tuning``.
+:mod:`altfusion.replay.system` unless ``paper_tuning``.
 """
 
 import math
@@ -15,17 +15,18 @@ from altfusion.cosim.instances import CosimError, fmu_info
 from altfusion.cosim.results import Results
 from altfusion.cosim.runner import Simulation
 from altfusion.cosim.system import SystemSpec
+from altfusion.errors import UsageError
 from altfusion.replay.compare import EstimatorReport, compare_all, settle_time
 from altfusion.replay.extract import FlightLog
 from altfusion.replay.plot import plot_replay
-from altfusion.replay.ulog import read_ulog
-from altfusion.systems.replay import (
+from altfusion.replay.system import (
     BASE_STEP,
     EstimatorEntry,
     launch_calibration,
     replay_system,
     replay_tuning,
 )
+from altfusion.replay.ulog import read_ulog
 
 
 @dataclass
@@ -80,6 +81,9 @@ def plan_replay(log_file: Path, estimators: list[str], fmu_paths: dict[str, Path
     """Read ``log_file`` and build its system with ``estimators`` (FMU model names)."""
     log_file = Path(log_file).resolve()
     log = read_ulog(log_file)
+    if time_offset >= log.duration:
+        raise UsageError(f"time offset {time_offset:g} s: at or beyond the end of the log's "
+                         f"sensor data ({log.duration:g} s)")
     entries = estimator_entries(estimators, fmu_paths, log, paper_tuning)
     spec, unconnected = replay_system(f"replay_{log_file.stem}", str(log_file),
                                       stop_time_for(log, time_offset), entries,

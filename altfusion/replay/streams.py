@@ -55,6 +55,38 @@ class SampleStream:
         return (*self.values, *valid, f"{self.prefix}_count", f"{self.prefix}_time")
 
 
+OUTLIER_WINDOW = 5
+"""Samples in the running median a time stamp is compared with (tolerates steps and runs of
+up to two bad stamps)."""
+OUTLIER_TOLERANCE_US = 1_000_000
+"""A stamp further than this (or ``OUTLIER_PERIODS`` median periods) from the running median
+of its neighbours in log order is an outlier."""
+OUTLIER_PERIODS = 5
+
+
+def outlier_stamps(time_us: np.ndarray, topic: str) -> tuple[np.ndarray, list[LogProblem]]:
+    """Mask of the plausible stamps (in log order) and what was dropped: a stamp far from the
+    running median of its ``OUTLIER_WINDOW`` neighbours (a corrupted stamp, +100000 s) would
+    stretch the replay to its time; a real gap in logging moves the median with it."""
+    time_us = np.asarray(time_us, dtype=np.int64)
+    if len(time_us) < OUTLIER_WINDOW:
+        return np.ones(len(time_us), dtype=bool), []
+    half = OUTLIER_WINDOW // 2
+    padded = np.pad(time_us, half, mode="edge")
+    windows = np.lib.stride_tricks.sliding_window_view(padded, OUTLIER_WINDOW)
+    median = np.median(windows, axis=1)
+    steps = np.diff(time_us)
+    period = float(np.median(steps[steps > 0])) if np.any(steps > 0) else 0.0
+    tolerance = max(OUTLIER_TOLERANCE_US, OUTLIER_PERIODS * period)
+    keep = np.abs(time_us - median) <= tolerance
+    if keep.all():
+        return keep, []
+    worst = time_us[~keep][np.argmax(np.abs((time_us - median)[~keep]))]
+    return keep, [LogProblem(topic, "bad time stamp",
+                             f"{int((~keep).sum())} sample(s) stamped far from their "
+                             f"neighbours (worst {worst} us); dropped")]
+
+
 def clean_order(time_us: np.ndarray, topic: str) -> tuple[np.ndarray, list[LogProblem]]:
     """Indices that put samples in strictly increasing time order, and what that took.
 

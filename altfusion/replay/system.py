@@ -102,7 +102,7 @@ class CatalogLog:
 
 LOGS = {
     "replay_auterion": CatalogLog(
-        "auterion_esc_status_log.ulg", 43.97, {"H0": 428.924, "T0": 299.88, "terrain_h": 423.953},
+        "auterion_esc_status_log.ulg", 43.95, {"H0": 428.924, "T0": 299.88, "terrain_h": 423.953},
         "Real PX4 flight (Auterion, FMU-v3): baro, GPS, accelerometer and lidar"),
     "replay_px4_sitl": CatalogLog(
         "pyulog_sample_px4_events.ulg", 31.14, {"H0": 488.005, "T0": 273.15, "terrain_h": 0.0},

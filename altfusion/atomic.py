@@ -1,0 +1,40 @@
+"""Atomic result files: every file is written under a temporary name in its own folder and
+renamed into place (``os.replace`` is atomic), so a failed or interrupted write (full disk,
+kill) leaves either the previous file or none under the final name, never a truncated one."""
+
+import os
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+from typing import IO, Any
+
+
+def atomic_write(path: Path, write: Callable[[IO[bytes]], None]) -> Path:
+    """Write ``path`` through ``write(handle)`` to a temporary file, then rename it into place."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    descriptor, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.",
+                                             suffix=".tmp")
+    try:
+        with os.fdopen(descriptor, "wb") as handle:
+            write(handle)
+            handle.flush()
+            os.fsync(handle.fileno())
+        os.chmod(temporary, 0o644)
+        os.replace(temporary, path)
+    except BaseException:
+        Path(temporary).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def write_text(path: Path, text: str) -> Path:
+    """:func:`atomic_write` of a UTF-8 text."""
+    return atomic_write(path, lambda handle: handle.write(text.encode()))
+
+
+def save_figure(fig: Any, path: Path, **options: Any) -> Path:
+    """``fig.savefig`` through :func:`atomic_write`, the format taken from the suffix."""
+    path = Path(path)
+    return atomic_write(path, lambda handle: fig.savefig(handle, format=path.suffix[1:],
+                                                         **options))

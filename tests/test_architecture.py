@@ -1,0 +1,123 @@
+"""The architecture of DEVELOPERS.md, enforced.
+
+The package's import contracts live in ``pyproject.toml`` (``[tool.importlinter]``) and are
+checked by import-linter's ``lint-imports``: the numerics (physics, sensors, estimators) import
+no FMI edge, runner, CLI or campaign code and no FMI library; the estimators are independent
+of each other; no two sibling modules or packages import each other. Each contract is shown to
+fail on a copy of the package with one violating import added. ``fmu_src/`` holds scripts, not
+a package, so its contract (a slave never imports the runner) is an AST check here.
+"""
+
+import ast
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+LINT_IMPORTS = Path(sys.executable).with_name("lint-imports")
+
+NUMERICS = "The numerics import no FMI edge"
+INDEPENDENCE = "Estimators are independent of each other"
+ACYCLIC = "No import cycles between sibling modules or packages"
+CONTRACTS = (NUMERICS, INDEPENDENCE, ACYCLIC)
+
+# The runner and everything above it: an FMU runs inside a host, never a host inside an FMU.
+FMU_SRC_FORBIDDEN = ("altfusion.cosim", "altfusion.montecarlo", "altfusion.cli",
+                     "altfusion.interop", "fmpy")
+
+
+def lint_imports(root: Path) -> subprocess.CompletedProcess:
+    """``lint-imports`` on the package and contracts found in ``root``."""
+    return subprocess.run([str(LINT_IMPORTS), "--no-cache"], cwd=root, capture_output=True,
+                          text=True, timeout=120)
+
+
+def broken_contracts(output: str) -> set[str]:
+    """The contracts whose summary line reads BROKEN (a long name wraps over two lines)."""
+    text = " ".join(output.split())
+    verdicts = {name: re.search(re.escape(name) + r"[^.]*?\b(KEPT|BROKEN)\b", text)
+                for name in CONTRACTS}
+    return {name for name, verdict in verdicts.items() if verdict and verdict[1] == "BROKEN"}
+
+
+def test_import_contracts_hold():
+    completed = lint_imports(ROOT)
+    assert completed.returncode == 0, completed.stdout + completed.stderr
+    assert "3 kept, 0 broken" in completed.stdout
+
+
+@pytest.mark.parametrize(("module", "violation", "contract"), [
+    ("physics/atmosphere.py", "import altfusion.fmi", NUMERICS),
+    ("sensors/gnss.py", "from altfusion.cosim import runner", NUMERICS),
+    ("estimators/kalman.py", "import altfusion.cli", NUMERICS),
+    ("estimators/base.py", "import altfusion.montecarlo.storage", NUMERICS),
+    ("sensors/sampling.py", "import altfusion.interop", NUMERICS),
+    ("estimators/yang.py", "import fmpy", NUMERICS),
+    ("estimators/xu.py", "from altfusion.estimators import yang", INDEPENDENCE),
+    ("montecarlo/commands.py", "import altfusion.cli", ACYCLIC),
+    ("replay/extract.py", "import altfusion.systems.catalog", ACYCLIC),
+    ("interop/engines.py", "import altfusion.interop.proxy", ACYCLIC),
+    ("cosim/system.py", "import altfusion.cosim.settings", ACYCLIC),
+])
+def test_each_contract_fails_on_a_violating_import(tmp_path: Path, module: str, violation: str,
+                                                   contract: str):
+    """A copy of the package with one import appended breaks the expected contract (a contract
+    that cannot fail would make test_import_contracts_hold vacuous). An edge import in the
+    numerics may also close a cycle (the edges import the numerics), so other contracts may
+    break too."""
+    shutil.copytree(ROOT / "altfusion", tmp_path / "altfusion",
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copy(ROOT / "pyproject.toml", tmp_path / "pyproject.toml")
+    target = tmp_path / "altfusion" / module
+    target.write_text(target.read_text() + f"\n{violation}  # noqa\n")
+    completed = lint_imports(tmp_path)
+    assert completed.returncode != 0
+    assert contract in broken_contracts(completed.stdout), completed.stdout
+
+
+def forbidden_imports(source: str) -> list[str]:
+    """The modules of ``FMU_SRC_FORBIDDEN`` (or below them) that ``source`` imports."""
+    imported = []
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Import):
+            imported += [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom) and node.module:
+            imported += [node.module] + [f"{node.module}.{alias.name}" for alias in node.names]
+    return sorted({name for name in imported for forbidden in FMU_SRC_FORBIDDEN
+                   if name == forbidden or name.startswith(forbidden + ".")})
+
+
+def test_fmu_scripts_never_import_the_runner():
+    scripts = sorted((ROOT / "fmu_src").glob("*_slave.py"))
+    assert len(scripts) == 15
+    violations = {script.name: forbidden_imports(script.read_text()) for script in scripts}
+    assert {name: found for name, found in violations.items() if found} == {}
+
+
+@pytest.mark.parametrize(("source", "found"), [
+    ("from altfusion.cosim import Simulation", ["altfusion.cosim", "altfusion.cosim.Simulation"]),
+    ("import altfusion.montecarlo.worker", ["altfusion.montecarlo.worker"]),
+    ("from altfusion import cli", ["altfusion.cli"]),
+    ("def f():\n    from fmpy import simulate_fmu", ["fmpy", "fmpy.simulate_fmu"]),
+    ("from altfusion.fmi import CoreSlave\nfrom altfusion.cosimulation import x", []),
+])
+def test_fmu_script_check_finds_runner_imports(source: str, found: list[str]):
+    assert forbidden_imports(source) == found
+
+
+def test_system_description_imports_no_fmi_library():
+    """Describing a system (plain data, the whole catalog) loads neither fmpy nor pythonfmu;
+    the runner's exports still import from the package, on first use."""
+    code = ("import sys\n"
+            "import altfusion.cosim.system, altfusion.systems\n"
+            "altfusion.systems.build_system(altfusion.systems.DEFAULT_SYSTEM)\n"
+            "assert not {'fmpy', 'pythonfmu'} & set(sys.modules), 'FMI library loaded'\n"
+            "from altfusion.cosim import Simulation, read_ssp\n"
+            "assert 'fmpy' in sys.modules and callable(read_ssp) and Simulation.run\n")
+    completed = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                               timeout=120)
+    assert completed.returncode == 0, completed.stderr
