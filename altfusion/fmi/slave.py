@@ -13,13 +13,23 @@ FMI behaviour that pythonfmu 0.7.0 leaves to us:
   return an error status, so a failed initialization (a bad parameter) is logged and every
   later ``doStep`` returns fmi2Discard with the reason.
 * The FMU state is the whole core object (filter state, random generators, tick clock), deep
-  copied on get and set and pickled for serialization.
-* pythonfmu 0.7.0 releases a reference it does not own: each instantiation ends with
-  ``Py_DECREF`` of the slave module's ``__dict__`` (a borrowed reference), so the dict is freed
-  while the module still uses it and the host crashes later, typically in the garbage
-  collector. Each instantiation first re-executes the slave script, which re-creates the slave
-  class; ``__init_subclass__`` therefore pins one extra reference to the module's dict per
-  execution, which balances the stray release.
+  copied on get and set. Serialized, it is data, never code (:mod:`altfusion.fmi.state`): a
+  header naming the model, GUID and core version, then a tagged JSON tree. pythonfmu turns
+  any exception of ``_fmu_state_from_bytes`` or ``_set_fmu_state`` into fmi2Fatal and drops
+  the instance's Python objects, so a refused state is not an exception: deserializing
+  returns a :class:`~altfusion.fmi.state.RefusedState` carrying the reason, and setting it
+  logs the reason at fmi2Error severity and leaves the instance as it was.
+* The GUID is a digest of the interface (:mod:`altfusion.fmi.guid`): every variable's value
+  reference, name, type, causality, variability, unit, bounds and start value, the slave
+  script's source and the core version.
+* pythonfmu 0.7.0 re-executes the slave script at each instantiation, releases a reference
+  to the module's dict it does not own and keeps a list referring to every class it finds;
+  the metaclass :class:`~altfusion.fmi.reexec.ReusedSlaveClass` balances the release and
+  hands back the existing class so that nothing new is kept (see that module).
+* ``step_size`` 0 (the default) adopts the first doStep's step: until then the core runs on
+  the default experiment's step (initial outputs), and the first doStep rebuilds the not yet
+  stepped core on the host's step, which checks every sample period against it. A later
+  different step is refused (logged at fmi2Error, fmi2Discard).
 * The modelDescription gets UnitDefinitions, per-variable units and bounds, output dependencies,
   InitialUnknowns and a VendorAnnotation with the core version and core class.
 * In Initialization Mode, outputs follow the parameters and inputs set so far: a set marks the
@@ -30,10 +40,8 @@ FMI behaviour that pythonfmu 0.7.0 leaves to us:
 
 import contextlib
 import copy
-import pickle
 import sys
 import traceback
-import uuid
 from dataclasses import replace
 from operator import attrgetter
 from typing import Any, ClassVar
@@ -44,6 +52,9 @@ from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Status
 
 from altfusion.component import DEFAULT_STEP_SIZE, Component
+from altfusion.fmi import state as fmu_state
+from altfusion.fmi.guid import interface_guid
+from altfusion.fmi.reexec import ReusedSlaveClass, drop_repeated_path_entry
 from altfusion.fmi.variables import Input, Output
 from altfusion.params import ParamInfo, coerce, param_infos
 from altfusion.units import BASE_UNITS
@@ -51,15 +62,19 @@ from altfusion.version import CORE_VERSION
 
 VENDOR_TOOL = "altfusion"
 
+ADOPT_FIRST_STEP = 0.0
+"""``step_size`` value meaning: the step of the first doStep."""
+
 STEP_SIZE = ParamInfo(
     name="step_size",
     type=float,
-    default=DEFAULT_STEP_SIZE,
+    default=ADOPT_FIRST_STEP,
     unit="s",
-    description="Communication step size of this instance; every doStep must use exactly it",
-    min=None,
+    description="Communication step size of this instance; 0 (default): the step of the first "
+                "doStep. Every doStep must then use exactly this step",
+    min=0.0,
     max=None,
-    positive=True,
+    positive=False,
 )
 
 _FMI_TYPES = {float: Real, int: Integer, bool: Boolean, str: String}
@@ -67,9 +82,6 @@ _PY_TYPES = {fmi: python for python, fmi in _FMI_TYPES.items()}
 
 MAX_CACHED_BATCHES = 256
 """Accessors kept per instance for distinct lists of value references (then made anew)."""
-
-_PINNED_MODULE_DICTS: list[dict[str, Any]] = []
-"""One reference per execution of a slave script (see the module docstring)."""
 
 
 def unit_definitions(units: set[str]) -> Element:
@@ -81,7 +93,7 @@ def unit_definitions(units: set[str]) -> Element:
     return element
 
 
-class CoreSlave(Fmi2Slave):
+class CoreSlave(Fmi2Slave, metaclass=ReusedSlaveClass):
     """pythonfmu slave that exposes one core :class:`~altfusion.component.Component`."""
 
     core_class: ClassVar[type[Component]]
@@ -90,22 +102,16 @@ class CoreSlave(Fmi2Slave):
     license = "MIT"
     version = CORE_VERSION
 
-    def __init_subclass__(cls, **kwargs: Any):
-        super().__init_subclass__(**kwargs)
-        module = sys.modules.get(cls.__module__)
-        if module is not None:
-            _PINNED_MODULE_DICTS.append(vars(module))
-
     def __init__(self, **kwargs: Any):
         super().__init__(**kwargs)
+        drop_repeated_path_entry(self.resources)
         self.modelName = type(self).__name__
         self.description = " ".join((type(self).__doc__ or "").strip().split("\n\n")[0].split())
-        self.guid = uuid.uuid5(uuid.NAMESPACE_URL, f"altfusion/{self.modelName}/{CORE_VERSION}")
         self.default_experiment = DefaultExperiment(
             start_time=0.0, stop_time=None, step_size=DEFAULT_STEP_SIZE
         )
         self._params = self.core_class.Params()
-        self._step_size = DEFAULT_STEP_SIZE
+        self._step_size = ADOPT_FIRST_STEP
         self._start_time = 0.0
         self._failure: str | None = None
         self._initializing = False
@@ -127,6 +133,17 @@ class CoreSlave(Fmi2Slave):
             self._getters[kind], self._setters[kind] = self._accessors(kind)
         self._readers: dict[type, dict[tuple[int, ...], Any]] = {k: {} for k in self._getters}
         self._writers: dict[type, dict[tuple[int, ...], Any]] = {k: {} for k in self._getters}
+        self.guid = self._class_guid()
+
+    def _class_guid(self) -> str:
+        """The GUID of this FMU's interface, computed from the first (fresh) instance of the
+        class and kept on the class: states are checked against it by class methods."""
+        cls = type(self)
+        if "_guid" not in cls.__dict__:
+            units = self._declared_units_and_bounds()
+            cls._guid = interface_guid(self.modelName, self.vars.values(), units,
+                                       sys.modules.get(cls.__module__), CORE_VERSION)
+        return cls._guid
 
     # ----------------------------------------------------------------- declarations
     @classmethod
@@ -177,12 +194,30 @@ class CoreSlave(Fmi2Slave):
 
     # ----------------------------------------------------------------- life cycle
     def _rebuild_core(self) -> None:
-        """Construct the core from the current parameters, keeping the inputs already set."""
+        """Construct the core from the current parameters, keeping the inputs already set
+        (on the default experiment's step while ``step_size`` waits for the first doStep)."""
+        if not self._step_size >= 0.0:
+            raise ValueError(f"parameter 'step_size' = {self._step_size!r}: must be >= 0 "
+                             "(0: the step of the first doStep)")
         inputs = {v.name: getattr(self.core, v.name) for v in self.variables
                   if isinstance(v, Input)}
-        self.core = self.core_class(self._params, step_size=self._step_size,
+        self.core = self.core_class(self._params,
+                                    step_size=self._step_size or DEFAULT_STEP_SIZE,
                                     start_time=self._start_time, inputs=inputs,
                                     resources=self.resources)
+
+    def _adopt_step(self, step_size: float) -> bool:
+        """Take the first doStep's step as ``step_size`` and rebuild the core on it (False,
+        with the reason logged, if the parameters do not fit that step)."""
+        self._step_size = float(step_size)
+        try:
+            self._rebuild_core()
+        except Exception as error:
+            self._failure = (f"step_size adopted from the first doStep ({step_size!r} s): "
+                             f"{error}")
+            self._log(Fmi2Status.error, f"cannot step, {self._failure}")
+            return False
+        return True
 
     def setup_experiment(self, start_time: float, stop_time=None, tolerance=None) -> None:
         self._start_time = float(start_time)
@@ -211,6 +246,8 @@ class CoreSlave(Fmi2Slave):
     def do_step(self, current_time: float, step_size: float) -> bool:
         if self._failure is not None:
             self._log(Fmi2Status.error, f"cannot step, {self._failure}")
+            return False
+        if self._step_size == ADOPT_FIRST_STEP and not self._adopt_step(step_size):
             return False
         core = self.core
         try:
@@ -346,7 +383,11 @@ class CoreSlave(Fmi2Slave):
             self._log_exception("getFMUstate")
             return {}
 
-    def _set_fmu_state(self, state: dict[str, Any]) -> None:
+    def _set_fmu_state(self, state: dict[str, Any] | fmu_state.RefusedState) -> None:
+        if isinstance(state, fmu_state.RefusedState):
+            self._log(Fmi2Status.error, f"setFMUstate refused the state: {state.reason}; "
+                                        "the instance keeps its current state")
+            return
         try:
             restored = copy.deepcopy(state)
             self.core = restored["core"]
@@ -357,13 +398,25 @@ class CoreSlave(Fmi2Slave):
         except Exception:
             self._log_exception("setFMUstate")
 
-    @staticmethod
-    def _fmu_state_to_bytes(state: dict[str, Any]) -> bytes:
-        return pickle.dumps(state, protocol=pickle.HIGHEST_PROTOCOL)
+    @classmethod
+    def _state_header(cls) -> fmu_state.StateHeader:
+        return fmu_state.StateHeader(model=cls.__name__, guid=cls._guid,
+                                     core_version=CORE_VERSION)
 
-    @staticmethod
-    def _fmu_state_from_bytes(state: bytes) -> dict[str, Any]:
-        return pickle.loads(state)
+    @classmethod
+    def _fmu_state_to_bytes(cls, state: dict[str, Any]) -> bytes:
+        return fmu_state.dump(cls._state_header(), state, own_module=cls.__module__)
+
+    @classmethod
+    def _fmu_state_from_bytes(cls, data: bytes) -> dict[str, Any] | fmu_state.RefusedState:
+        """The state in ``data``, or a RefusedState saying why not (never an exception: see
+        the module docstring)."""
+        try:
+            return fmu_state.load(bytes(data), cls._state_header(), own_module=cls.__module__)
+        except fmu_state.StateError as error:
+            return fmu_state.RefusedState(str(error))
+        except Exception as error:      # a bug of ours must not become fmi2Fatal either
+            return fmu_state.RefusedState(f"unreadable state ({type(error).__name__}: {error})")
 
     # ----------------------------------------------------------------- modelDescription
     def to_xml(self, model_options: dict[str, str] | None = None) -> Element:

@@ -1,0 +1,94 @@
+"""A user who imports one FMU into a tool: ``step_size`` defaults to the tool's step (the
+first doStep's; fmpy's co-simulation step is its ``output_interval``), a later different step
+or a step that does not fit the sample periods is refused with the reason logged at
+fmi2Error, and LogReplay without pyulog says so.
+
+pythonfmu 0.7.0 forwards an FMU's messages only while debug logging is on, so these tests
+ask for it (``debug_logging=True``); reaching a host that leaves it off is the native
+shim's part."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from fmpy import simulate_fmu
+
+from altfusion.cosim.instances import CosimError, FmuInstance, fmu_info
+
+FMI2_ERROR = 3
+
+
+class Messages(list):
+    """An fmpy logger keeping (status, message)."""
+
+    def __call__(self, _component, _instance, status, _category, message):
+        self.append((status, message.decode()))
+
+    def errors(self) -> list[str]:
+        return [m for s, m in self if s >= FMI2_ERROR]
+
+
+def test_the_default_step_size_is_the_tools_step(fmus):
+    """1 s at the tool's 0.05 s step: 21 rows (0 to 1 s), no error."""
+    messages = Messages()
+    result = simulate_fmu(str(fmus["GnssReceiver"]), output_interval=0.05, stop_time=1.0,
+                          start_values={"h": 100.0, "sample_period": 0.1},
+                          output=["gps_h", "gps_count"], debug_logging=True, logger=messages)
+    assert messages.errors() == []
+    np.testing.assert_allclose(result["time"], np.arange(21) * 0.05, rtol=0, atol=1e-12)
+    assert result["gps_count"][-1] == 10            # a fix every 0.1 s over 1 s
+
+
+def test_a_step_other_than_the_set_step_size_is_refused_with_the_reason(fmus):
+    messages = Messages()
+    result = simulate_fmu(str(fmus["GnssReceiver"]), output_interval=0.05, stop_time=1.0,
+                          start_values={"step_size": 0.01}, output=["gps_h"],
+                          debug_logging=True, logger=messages)
+    assert len(result) < 21
+    assert any("communication step 0.05 s differs from parameter step_size = 0.01 s" in m
+               for m in messages.errors()), messages
+
+
+def test_an_adopted_step_that_does_not_fit_a_sample_period_is_refused_naming_it(fmus):
+    """The GNSS fix period 1 s is not a whole number of 0.3 s steps."""
+    messages = Messages()
+    simulate_fmu(str(fmus["GnssReceiver"]), output_interval=0.3, stop_time=1.2, output=["gps_h"],
+                 debug_logging=True, logger=messages)
+    errors = messages.errors()
+    assert errors and "step_size adopted from the first doStep (0.3 s)" in errors[0]
+    assert "sample_period" in errors[0], errors
+
+
+def test_log_replay_without_pyulog_logs_an_error_naming_pyulog(fmus):
+    """In a Python where ``import pyulog`` fails, as in a host without the package."""
+    script = (
+        "import sys\n"
+        "sys.modules['pyulog'] = None\n"
+        "from fmpy import simulate_fmu\n"
+        "seen = []\n"
+        "def logger(c, i, status, cat, msg):\n"
+        "    seen.append((status, msg.decode()))\n"
+        "simulate_fmu(sys.argv[1], output_interval=0.01, stop_time=0.1, debug_logging=True,\n"
+        "             start_values={'log_file': 'flightlogs/pyulog_sample_px4_events.ulg'},\n"
+        "             logger=logger)\n"
+        "print('\\n'.join(m for s, m in seen if s >= 3))\n"
+    )
+    completed = subprocess.run([sys.executable, "-c", script, str(fmus["LogReplay"])],
+                               capture_output=True, text=True, timeout=120)
+    assert "needs the Python package pyulog" in completed.stdout, (completed.stdout,
+                                                                   completed.stderr[-2000:])
+
+
+def test_a_later_step_other_than_the_adopted_one_is_refused(fmus):
+    instance = FmuInstance("gnss", fmu_info(fmus["GnssReceiver"]))
+    try:
+        instance.initialize({"sample_period": 0.1}, 0.0, 0.0, 1.0)    # 0: adopt
+        instance.exit_initialization()
+        instance.do_step(0.0, 0.05)
+        instance.do_step(0.05, 0.05)
+        with pytest.raises(CosimError, match=r"communication step 0\.1 s differs from "
+                                             r"parameter step_size = 0\.05 s"):
+            instance.do_step(0.1, 0.1)
+    finally:
+        instance.free()
