@@ -1,4 +1,4 @@
-"""The signal contract (``../shared/spec/signals.md``) as data: name -> (type, unit, meaning).
+"""The signal contract (``docs/signals.md``) as data: name -> (type, unit, meaning).
 
 Adapters declare contract signals from this table, so a signal has one unit and one
 description in every FMU that carries it.
@@ -39,4 +39,11 @@ SIGNALS: dict[str, tuple[type, str | None, str]] = {
     "h_est": (float, "m", "Altitude estimate (MSL)"),
     "vz_est": (float, "m/s", "Vertical-speed estimate, positive up"),
     "h_std": (float, "m", "The filter's own standard deviation of h_est"),
+    "h_valid": (bool, None, "h_est valid: the estimator is initialized and fused a height "
+                            "sample within aiding_timeout"),
+    "status": (int, None, "Estimator status bit field (docs/estimator_health.md)"),
+    "n_rejected": (int, None, "Samples rejected by the gates so far, all sources"),
+    "n_ignored": (int, None, "Invalid, non-finite or absurdly stamped samples ignored so far"),
+    "n_height_resets": (int, None, "Height resets so far (every height source disagreed with "
+                                   "the prediction)"),
 }

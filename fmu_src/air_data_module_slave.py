@@ -1,28 +1,28 @@
 """FMU AirDataModule: maps FMI variables onto altfusion.sensors.air_data."""
 
-from altfusion.fmi import CoreSlave, Input, Output
+from altfusion import fmi
 from altfusion.sensors import air_data
 
 AIR = ("p_static", "T_air", "wind_speed")
 
 
-class AirDataModule(CoreSlave):
+class AirDataModule(fmi.CoreSlave):
     """Barometer and thermometer sampled on their own schedule: static pressure with wind
     disturbance, bias, drift, noise and quantization, and the baro-height of the launch
     calibration."""
 
     core_class = air_data.AirDataModule
     variables = (
-        Input("p_static", "Pa", "True static pressure at the vehicle"),
-        Input("T_air", "K", "True air temperature at the vehicle"),
-        Input("wind_speed", "m/s", "Wind speed at the vehicle (dynamic-pressure disturbance)"),
-        Output("baro_p", "Pa", "Measured static pressure (held sample)", depends_on=AIR),
-        Output("baro_T", "K", "Measured air temperature (held sample)", depends_on=("T_air",)),
-        Output("baro_h", "m", "Baro-height from the launch calibration (held sample, MSL)",
-               depends_on=AIR),
-        Output("baro_drift", "m", "Drift contained in the held sample (diagnostic truth)",
-               depends_on=()),
-        Output("baro_count", None, "Number of samples delivered so far", type=int,
-               depends_on=()),
-        Output("baro_time", "s", "Time at which the held sample was taken", depends_on=()),
+        fmi.Input("p_static", "Pa", "True static pressure at the vehicle"),
+        fmi.Input("T_air", "K", "True air temperature at the vehicle"),
+        fmi.Input("wind_speed", "m/s", "Wind speed at the vehicle (dynamic-pressure disturbance)"),
+        fmi.Output("baro_p", "Pa", "Measured static pressure (held sample)", depends_on=AIR),
+        fmi.Output("baro_T", "K", "Measured air temperature (held sample)", depends_on=("T_air",)),
+        fmi.Output("baro_h", "m", "Baro-height from the launch calibration (held sample, MSL)",
+                   depends_on=AIR),
+        fmi.Output("baro_drift", "m", "Drift contained in the held sample (diagnostic truth)",
+                   depends_on=()),
+        fmi.Output("baro_count", None, "Number of samples delivered so far", type=int,
+                   depends_on=()),
+        fmi.Output("baro_time", "s", "Time at which the held sample was taken", depends_on=()),
     )

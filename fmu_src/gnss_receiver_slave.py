@@ -1,24 +1,24 @@
 """FMU GnssReceiver: maps FMI variables onto altfusion.sensors.gnss."""
 
-from altfusion.fmi import CoreSlave, Input, Output
+from altfusion import fmi
 from altfusion.sensors import gnss
 
 
-class GnssReceiver(CoreSlave):
+class GnssReceiver(fmi.CoreSlave):
     """GNSS height and vertical velocity with VDOP-scaled noise, an optional Gauss-Markov
     error, satellite geometry (constant, scheduled or random) and outages."""
 
     core_class = gnss.GnssReceiver
     variables = (
-        Input("h", "m", "True altitude (MSL)"),
-        Input("vz", "m/s", "True vertical speed, positive up"),
-        Output("gps_h", "m", "Measured height (held sample, MSL)", depends_on=("h",)),
-        Output("gps_vz", "m/s", "Measured vertical speed (held sample)", depends_on=("vz",)),
-        Output("gps_vdop", "1", "Vertical dilution of precision of the held fix",
-               depends_on=()),
-        Output("gps_nsat", None, "Satellites used in the held fix", type=int, depends_on=()),
-        Output("gps_fix", None, "True while the receiver has a fix", type=bool,
-               depends_on=()),
-        Output("gps_count", None, "Number of fixes delivered so far", type=int, depends_on=()),
-        Output("gps_time", "s", "Time at which the held fix was taken", depends_on=()),
+        fmi.Input("h", "m", "True altitude (MSL)"),
+        fmi.Input("vz", "m/s", "True vertical speed, positive up"),
+        fmi.Output("gps_h", "m", "Measured height (held sample, MSL)", depends_on=("h",)),
+        fmi.Output("gps_vz", "m/s", "Measured vertical speed (held sample)", depends_on=("vz",)),
+        fmi.Output("gps_vdop", "1", "Vertical dilution of precision of the held fix",
+                   depends_on=()),
+        fmi.Output("gps_nsat", None, "Satellites used in the held fix", type=int, depends_on=()),
+        fmi.Output("gps_fix", None, "True while the receiver has a fix", type=bool,
+                   depends_on=()),
+        fmi.Output("gps_count", None, "Number of fixes delivered so far", type=int, depends_on=()),
+        fmi.Output("gps_time", "s", "Time at which the held fix was taken", depends_on=()),
     )

@@ -1,6 +1,6 @@
 """FMU LogReplay: maps FMI variables onto altfusion.replay.component."""
 
-from altfusion.fmi import CoreSlave, contract_output
+from altfusion import fmi
 from altfusion.replay import component
 
 SOURCES = {
@@ -17,12 +17,12 @@ SOURCES = {
 }
 
 
-class LogReplay(CoreSlave):
+class LogReplay(fmi.CoreSlave):
     """Replays a PX4 flight log (ULog): air data, GNSS, vertical acceleration, downward
     rangefinder and PX4 EKF2's height, each stream at its recorded time stamps with its own
     count and time stamp. The two test logs are bundled under resources/flightlogs/."""
 
     core_class = component.LogReplay
     bundled_files = ("tests/data/flightlogs",)
-    variables = tuple(contract_output(name, depends_on=(), description=SOURCES.get(name))
+    variables = tuple(fmi.contract_output(name, depends_on=(), description=SOURCES.get(name))
                       for name in component.OUTPUT_NAMES)

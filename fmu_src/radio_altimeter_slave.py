@@ -1,23 +1,23 @@
 """FMU RadioAltimeter: maps FMI variables onto altfusion.sensors.radio_altimeter."""
 
-from altfusion.fmi import CoreSlave, Input, Output
+from altfusion import fmi
 from altfusion.sensors import radio_altimeter
 
 RANGE = ("h", "terrain_h")
 
 
-class RadioAltimeter(CoreSlave):
+class RadioAltimeter(fmi.CoreSlave):
     """Radio altimeter: height above the terrain with white noise, up to a maximum range."""
 
     core_class = radio_altimeter.RadioAltimeter
     variables = (
-        Input("h", "m", "True altitude (MSL)"),
-        Input("terrain_h", "m", "Terrain height under the vehicle (MSL)"),
-        Output("radar_h", "m", "Measured height above the terrain (held valid sample)",
-               depends_on=RANGE),
-        Output("radar_valid", None, "True while the held sample is current (within range)",
-               type=bool, depends_on=RANGE),
-        Output("radar_count", None, "Number of valid samples delivered so far", type=int,
-               depends_on=RANGE),
-        Output("radar_time", "s", "Time at which the held sample was taken", depends_on=RANGE),
+        fmi.Input("h", "m", "True altitude (MSL)"),
+        fmi.Input("terrain_h", "m", "Terrain height under the vehicle (MSL)"),
+        fmi.Output("radar_h", "m", "Measured height above the terrain (held valid sample)",
+                   depends_on=RANGE),
+        fmi.Output("radar_valid", None, "True while the held sample is current (within range)",
+                   type=bool, depends_on=RANGE),
+        fmi.Output("radar_count", None, "Number of valid samples delivered so far", type=int,
+                   depends_on=RANGE),
+        fmi.Output("radar_time", "s", "Time at which the held sample was taken", depends_on=RANGE),
     )

@@ -1,17 +1,17 @@
 """FMU VerticalDynamics: maps FMI variables onto altfusion.physics.vertical_dynamics."""
 
-from altfusion.fmi import CoreSlave, Input, Output
+from altfusion import fmi
 from altfusion.physics import vertical_dynamics
 
 
-class VerticalDynamics(CoreSlave):
+class VerticalDynamics(fmi.CoreSlave):
     """Point-mass vertical dynamics of a UAV: thrust, gravity, quadratic drag; RK4 sub-steps."""
 
     core_class = vertical_dynamics.VerticalDynamics
     variables = (
-        Input("thrust", "N", "Total thrust along the vertical, held over each step", min=0.0),
-        Output("h", "m", "True altitude (MSL)", depends_on=()),
-        Output("vz", "m/s", "True vertical speed, positive up", depends_on=()),
-        Output("az", "m/s2", "True vertical acceleration at the end of the step, positive up",
-               depends_on=()),
+        fmi.Input("thrust", "N", "Total thrust along the vertical, held over each step", min=0.0),
+        fmi.Output("h", "m", "True altitude (MSL)", depends_on=()),
+        fmi.Output("vz", "m/s", "True vertical speed, positive up", depends_on=()),
+        fmi.Output("az", "m/s2", "True vertical acceleration at the end of the step, positive up",
+                   depends_on=()),
     )

@@ -1,22 +1,20 @@
 """FMU YangFusionKF: maps FMI variables onto altfusion.estimators.yang."""
 
+from altfusion import fmi
 from altfusion.estimators import yang
-from altfusion.fmi import CoreSlave, Output, estimator_variables
 
 
-class YangFusionKF(CoreSlave):
+class YangFusionKF(fmi.CoreSlave):
     """Yang et al.'s altitude measurement (seed 003): time-unified, optimally weighted GPS,
     baro and radio-altimeter heights, then a Kalman filter on height, vertical speed and
     acceleration with the GPS vertical speed and the IMU acceleration."""
 
     core_class = yang.YangFusionKF
-    variables = estimator_variables(core_class.streams, (
-        Output("h_fused", "m", "Weighted-fusion height y of the last fusion (eq. 7)"),
-        Output("fused_std", "m", "Its standard deviation σ_Y = (Σ 1/σ_i²)^(-1/2)"),
-        Output("az_est", "m/s2", "Vertical-acceleration estimate"),
-        Output("weight_gps", "1", "Weight ω of GPS in the last fusion (0: not live)"),
-        Output("weight_baro", "1", "Weight ω of the baro in the last fusion"),
-        Output("weight_radar", "1", "Weight ω of the radio altimeter in the last fusion"),
-        Output("n_rejected", None, "Height samples rejected by the gate", type=int),
-        Output("n_ignored", None, "Non-finite samples ignored", type=int),
+    variables = fmi.estimator_variables(core_class.streams, (
+        fmi.Output("h_fused", "m", "Weighted-fusion height y of the last fusion (eq. 7)"),
+        fmi.Output("fused_std", "m", "Its standard deviation σ_Y = (Σ 1/σ_i²)^(-1/2)"),
+        fmi.Output("az_est", "m/s2", "Vertical-acceleration estimate"),
+        fmi.Output("weight_gps", "1", "Weight ω of GPS in the last fusion (0: not live)"),
+        fmi.Output("weight_baro", "1", "Weight ω of the baro in the last fusion"),
+        fmi.Output("weight_radar", "1", "Weight ω of the radio altimeter in the last fusion"),
     ))

@@ -200,16 +200,57 @@ def test_libcosim_reproduces_the_jacobi_reference_bit_for_bit(engine_runs, syste
                       label=engine)
 
 
+ENGINE_ACCURACY_RATIO = 1.5
+"""Largest ratio between two engines' RMS statistics of a column that does not come out bit
+for bit (issue 14: the same accuracy, 1.5x at most). Measured on the divergent systems'
+engine runs, ECOS over Jacobi: estimates 0.95-1.12 (yang2020 1.64 / 1.46 m), tracking 1.12."""
+
+TRUTH_OF_SUFFIX = {"_h": "plant.h", "h_est": "plant.h", "h_fused": "plant.h",
+                   "h_ref": "plant.h", "vz": "plant.vz", "vz_est": "plant.vz",
+                   "acc_z": "plant.az"}
+"""The plant signal a recorded column measures or estimates, by the column's name ending."""
+
+
+def _accuracy(results, name: str) -> float:
+    """The RMS error of column ``name`` against the plant signal it measures or estimates
+    (plant columns themselves and columns with no such truth: the RMS of the column)."""
+    values = results[name]
+    truth = next((results[t] for suffix, t in TRUTH_OF_SUFFIX.items()
+                  if name.endswith(suffix) and t in results.columns and t != name), 0.0)
+    return float(np.sqrt(np.mean((values - truth) ** 2)))
+
+
+def _is_event_count(name: str) -> bool:
+    """True for a column counting events (``n_rejected``, ``gps_rejected``...)."""
+    signal = name.partition(".")[2]
+    return signal.startswith("n_") or signal.endswith("_rejected")
+
+
 @pytest.mark.parametrize("system", ENGINE_SYSTEMS)
-def test_ecos_reproduces_the_jacobi_reference_bit_for_bit(engine_runs, system):
+def test_ecos_reproduces_the_jacobi_reference_bit_for_bit_or_with_the_same_accuracy(
+        engine_runs, system):
     """ECOS agrees exactly except downstream of a slower-to-faster connection (none in a
-    single-rate system), at multiples of each component's step."""
+    single-rate system), at multiples of each component's step. Downstream of one, an
+    estimator sees samples stamped ahead of its clock: it holds them until due
+    (estimators/base.py), so every engine fuses them at the same instant up to one step,
+    and each of these columns has the same accuracy as in the reference: the RMS error of
+    a height, speed or acceleration against the plant's own in that run, or the RMS of a
+    diagnostic, within ENGINE_ACCURACY_RATIO either way. Event counters (``n_*``,
+    ``*_rejected``) are no accuracy: which samples a gate rejects at take-off depends on the
+    instant each is fused (XuSHAEKF re-acquires its laser once, 10 rejections, under the
+    Jacobi reference's one-step-late samples and not under ECOS's); they must count up."""
     spec = build_system(system)
     ecos, reference = engine_runs(system, "ecos"), engine_runs(system, "altfusion-jacobi")
     divergent = ecos_divergent_components(spec)
     for name in reference.columns:
         component = spec.component(name.partition(".")[0])
+        if component.name in divergent and _is_event_count(name):
+            assert np.all(np.diff(ecos[name]) >= 0), name
+            continue
         if component.name in divergent:
+            ours, theirs = _accuracy(reference, name), _accuracy(ecos, name)
+            assert theirs <= ENGINE_ACCURACY_RATIO * ours + 1e-9, (name, theirs, ours)
+            assert ours <= ENGINE_ACCURACY_RATIO * theirs + 1e-9, (name, theirs, ours)
             continue
         every = round(component.step_size / (spec.output_interval or spec.base_step))
         _assert_identical(ecos, reference, [name], slice(0, None, max(every, 1)), "ecos")

@@ -5,6 +5,7 @@ from statistics import NormalDist
 
 import numpy as np
 import pytest
+from state_restore import assert_restores_identically
 
 from altfusion.cosim import CosimError, Simulation, simulate
 from altfusion.cosim.instances import FmuInstance, fmu_info
@@ -119,12 +120,6 @@ def test_fmu_state_save_and_restore_continue_bit_identically(fmus):
                              "outage_rate": 0.05, "latency": 0.3, "seed": 4}, 0.1, 0.0, 100.0)
         instance.exit_initialization()
         advance(0, 50)
-        state = instance.get_state()
-        serialized = instance.fmu.serializeFMUstate(state)
-        first = advance(50, 100)
-        instance.set_state(state)
-        assert advance(50, 100) == first
-        instance.set_state(instance.fmu.deSerializeFMUstate(serialized))
-        assert advance(50, 100) == first
+        assert_restores_identically(instance, lambda: advance(50, 100))
     finally:
         instance.free()

@@ -2,14 +2,15 @@
 
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
-from altfusion.estimators.base import BARO, RADAR, RADAR_TIMED, Estimator
+from altfusion.estimators.base import BARO, RADAR, Estimator, HealthParams, status_bits
 from altfusion.fmi import estimator_variables
 from altfusion.params import param
 
 
 @dataclass(frozen=True)
-class EchoParams:
+class EchoParams(HealthParams):
     gain: float = param(1.0, "1", "Unused")
 
 
@@ -17,7 +18,7 @@ class Echo(Estimator):
     """Records what the base hands over: the fused samples and the held wind speed."""
 
     Params = EchoParams
-    streams = (BARO, RADAR_TIMED)
+    streams = (BARO, RADAR)
     extra_inputs = ("wind_speed",)
 
     def initialize_filter(self) -> None:
@@ -30,13 +31,8 @@ class Echo(Estimator):
     def fuse(self, stream, sample) -> None:
         self.fused.append((stream.prefix, sample))
 
-
-def test_a_timed_stream_carries_the_time_stamp_as_a_value():
-    assert RADAR_TIMED.values == ("radar_h", "radar_time")
-    assert (RADAR_TIMED.count, RADAR_TIMED.valid, RADAR_TIMED.time) == (
-        "radar_count", "radar_valid", "radar_time")
-    assert RADAR_TIMED.timed() is RADAR_TIMED
-    assert RADAR.timed() == RADAR_TIMED
+    def reset_height(self, source, innovation, variance) -> None:
+        raise AssertionError("Echo gates nothing")
 
 
 def test_timed_samples_include_their_stamp():
@@ -74,6 +70,31 @@ def test_extra_inputs_default_to_zero_and_held_input_starts_from_zero_if_not_fin
 def test_estimator_variables_declare_stream_inputs_then_extra_inputs():
     variables = estimator_variables(Echo.streams, (), Echo.extra_inputs)
     names = [v.name for v in variables]
-    assert names == ["baro_h", "baro_count", "radar_h", "radar_time", "radar_count",
-                     "radar_valid", "wind_speed", "h_est", "vz_est", "h_std"]
+    assert names[:10] == ["baro_h", "baro_count", "baro_time", "radar_h", "radar_count",
+                          "radar_time", "radar_valid", "wind_speed", "h_est", "vz_est"]
+    assert names[10:] == ["h_std", "h_valid", "status", "n_rejected", "n_ignored",
+                          "n_height_resets", "baro_test_ratio", "baro_rejected",
+                          "radar_test_ratio", "radar_rejected"]
     assert {v.name: v.unit for v in variables}["wind_speed"] == "m/s"
+
+
+def test_every_status_bit_is_documented_with_its_mask():
+    """docs/estimator_health.md lists each bit of status_bits() as `| bit | mask | name |`."""
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "estimator_health.md").read_text()
+    for name, mask in status_bits().items():
+        assert f"| {mask.bit_length() - 1} | 0x{mask:08X} | `{name}` |" in doc, name
+
+
+def test_a_sample_stamped_ahead_of_the_clock_is_held_until_due_and_an_absurd_one_refused():
+    """ECOS shows a 10 Hz sample of t = 0.3 s at t = 0.1 s: it is fused at 0.3 s, not before;
+    a stamp more than max_sample_lead (1 s) ahead is refused and counted."""
+    echo = Echo(step_size=0.1)
+    echo.radar_h, echo.radar_time, echo.radar_count = 12.0, 0.3, 1
+    for n in range(3):
+        assert echo.fused == []
+        echo.do_step(n * 0.1, 0.1)
+    assert echo.fused == [("radar", {"radar_h": 12.0, "radar_time": 0.3})]
+    echo.radar_time, echo.radar_count = 1.5, 2
+    for n in range(3, 20):
+        echo.do_step(n * 0.1, 0.1)
+    assert len(echo.fused) == 1 and echo.n_ignored == 1

@@ -55,7 +55,7 @@ def test_wind_error_is_eq_11_at_isa_sea_level(speed, expected):
     (a correction: negative, the wind makes the barometer read high)."""
     dynamic = 0.5 * 1.25 * speed**2
     correction = wind_error(ISA[0] - dynamic, speed, 1.25, 0.0, *ISA)
-    assert correction == pytest.approx(-expected, abs=0.0005)
+    assert correction == pytest.approx(-expected, abs=0.0005)  # the values' 3 decimals
 
 
 def test_wind_correction_recovers_the_undisturbed_baro_height_when_enabled():
@@ -73,6 +73,7 @@ def test_wind_correction_recovers_the_undisturbed_baro_height_when_enabled():
             feeder.step(baro=baro(height_from_pressure(p_measured, *ISA), p_measured),
                         inputs={"wind_speed": speed})
             if use_wind:
+                # exact up to rounding through the barometric formula (~1e-12 m at 800 m)
                 assert estimator.h_baro_corrected == pytest.approx(800.0, abs=1e-6)
                 assert -3.5 < estimator.wind_error < -1.0    # ½ρv²/(ρ_air g), v = 4.5-7.5
             else:

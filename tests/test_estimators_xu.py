@@ -210,3 +210,13 @@ def test_strong_tracking_inflates_the_motion_states_not_the_baro_error():
     assert estimator.P[3, 3] == before[3, 3]
     np.testing.assert_allclose(estimator.P[:3, :3], factor * before[:3, :3], rtol=1e-12)
     np.testing.assert_allclose(estimator.P[:3, 3], np.sqrt(factor) * before[:3, 3], rtol=1e-12)
+
+
+def test_samples_equal_to_the_prediction_do_not_divide_by_zero():
+    """Noise-free constant inputs make every innovation exactly 0, so α_C = 0 in eq. (18):
+    the weight is 1 (α_C ≤ c), not c/0."""
+    estimator = XuSHAEKF(step_size=0.01)
+    feeder = StreamFeeder(estimator)
+    for _ in range(300):
+        feeder.step(acc={"acc_z": 0.0}, baro={"baro_h": 100.0}, gps={"gps_h": 100.0})
+    assert estimator.h_est == 100.0 and estimator.weight_baro == 1.0

@@ -26,7 +26,8 @@ def test_noise_and_bias_have_the_stated_values():
 
 def test_gravity_is_removed_with_its_nominal_value():
     """The sensor feels az + g; subtracting a nominal g that differs from the true one leaves
-    the difference in acc_z."""
+    the difference in acc_z. Without noise both are exact up to rounding of the ~10 m/s²
+    terms: ε·10 m/s² ≈ 2e-15 m/s² (bound 1e-12)."""
     exact = run(accelerometer(noise_std=0.0), 100, ("acc_z",), manoeuvre)
     assert np.allclose(exact["acc_z"], 0.2 * np.sin(exact["time"]), rtol=0, atol=1e-12)
     off = run(accelerometer(noise_std=0.0, gravity=9.81, nominal_gravity=9.80665), 100,
@@ -48,6 +49,8 @@ def test_turn_on_bias_is_drawn_once_per_run_with_the_stated_sigma():
 
 
 def test_the_turn_on_bias_does_not_change_the_noise_realization():
+    """The bias has its own random stream: the two runs differ by the constant bias, up to
+    rounding of the ~10 m/s² specific force (ε·10 m/s² ≈ 2e-15, bound 1e-12)."""
     plain = run(accelerometer(seed=4), 500, ("acc_z",))
     biased = run(accelerometer(seed=4, bias_std=0.1), 500, ("acc_z",))
     offset = biased["acc_z"] - plain["acc_z"]

@@ -75,6 +75,8 @@ def test_temperature_has_the_stated_bias_and_sigma():
 
 
 def test_pressure_bias_offsets_the_reported_pressure_exactly():
+    """Without noise, drift or quantization the offset is exact up to rounding: the round trip
+    through the calibration's height (1e5 Pa × a few ε ≈ 1e-10 Pa; bound 1e-6 Pa)."""
     series = run(air_data(**{**QUIET, "pressure_bias": 35.0}), 500, OUTPUTS, climbing)
     truth = [isa_air(h)["p_static"] for h in true_height(series["time"])]
     assert np.allclose(series["baro_p"] - truth, 35.0, rtol=0, atol=1e-6)
@@ -177,7 +179,8 @@ def test_wind_error_is_exactly_seed_001_eq_11(h, v, rho):
 def test_wind_error_matches_seed_001_table_3_at_a_site_air_density_of_1_12(v, table_3):
     """NOTES.md: Table 3's theoretical values are eq. (11) with the paper's ρ = 1.25 kg/m³ in
     eq. (7) at a site whose own air density is about 1.12 kg/m³ (a warm day: 30 °C). The
-    barometer is calibrated at the site."""
+    barometer is calibrated at the site. The error scales as 1/ρ_site, and that density is
+    inferred ("about 1.12"): 5 % covers 1.07-1.18 kg/m³, a site ±15 K around 30 °C."""
     T_site = 303.15
     p_site = 1.12 * R_AIR * T_site
     error, _ = wind_error({"dynamic_pressure_density": 1.25, "P0": p_site, "T0": T_site},
@@ -187,13 +190,16 @@ def test_wind_error_matches_seed_001_table_3_at_a_site_air_density_of_1_12(v, ta
 
 def test_with_the_actual_air_density_the_wind_error_is_the_dynamic_head():
     """With ρ the density of the air itself, eq. (11) is ½ρv²/(ρg) = v²/(2g) to first order,
-    whatever the weather: 0.1147 m at 1.5 m/s."""
+    whatever the weather: 0.1147 m at 1.5 m/s. The second-order term is of relative size
+    ½ρv²/p ≈ 1.4 Pa / 1e5 Pa ≈ 1e-5 (5.5e-6 here); bound 1e-3."""
     for p_static, T_air in ((ISA_P0, ISA_T0), (95000.0, 305.0)):
         error, _ = wind_error({"P0": p_static, "T0": T_air}, p_static, T_air, 1.5)
         assert error == pytest.approx(1.5**2 / (2 * G0), rel=1e-3)
 
 
 def test_wind_coupling_scales_the_dynamic_pressure():
+    """Eq. (11) is linear in the pressure drop up to its second-order term, of relative size
+    ½ρv²/p = 61 Pa / 101325 Pa = 6e-4 at 10 m/s (1.2e-4 here); bound 1e-3."""
     full, _ = wind_error({}, ISA_P0, ISA_T0, 10.0)
     half, _ = wind_error({"wind_coupling": 0.5}, ISA_P0, ISA_T0, 10.0)
     assert half == pytest.approx(full / 2, rel=1e-3)

@@ -86,6 +86,7 @@ def test_random_geometry_stays_in_bounds_and_vdop_follows_the_satellite_count():
     nsat = series["gps_nsat"]
     assert nsat.min() == 5 and nsat.max() == 11
     assert np.all(np.abs(np.diff(nsat)) <= 1)
+    # the receiver computes this very formula: rounding only (a few ε = 2.2e-16 relative)
     assert np.allclose(series["gps_vdop"], 1.2 * np.sqrt(8 / nsat), rtol=1e-12)
     # a ±1 step with probability 1 - exp(-1/20) per sample, held at the bounds: at most that
     # many changes (binomial, 99.9 % upper bound)

@@ -15,8 +15,8 @@ paper writes the baro height as H_B = h_t - δh_B (Section 3.3) and δh_B = ε_p
   lowers the static pressure the barometer measures (eq. 8), so with P_S' the undisturbed
   static pressure = measured ``baro_p`` + ½ρv²,
   ε_e = (T0/β)[(P_S'/P0)^(-βR/g) - ((P_S' - ½ρv²)/P0)^(-βR/g)]  (negative: wind reads high).
-  This is eq. (11) with P_S' read as the undisturbed pressure, which makes it exact (NOTES.md);
-  taking the measured pressure instead differs in the second order only. ``wind_speed`` is an
+  This is eq. (11) with P_S' read as the undisturbed pressure (our reading, see the deviations
+  below). ``wind_speed`` is an
   input, used only when ``use_wind`` is true (FMI cannot tell whether an input is connected);
   a non-finite wind speed is noted and the last finite one is used.
 * Drift (Sections 2.2, 3.3): the random walk of eq. (6) discretised as eq. (12),
@@ -35,9 +35,23 @@ R = ``R_gps``.
 
 Outputs: h_est = H_B + ε_p + ε_e + ε̂_d (the corrected baro height); h_std = √(P + R_baro)
 (the drift estimate's variance plus the baro's white noise, which the random-walk state does
-not carry); the algorithm estimates no vertical speed, so vz_est is always 0. A GPS sample whose
-innovation exceeds ``gate_sigma`` standard deviations √(P + R_k) is rejected and logged (not in
-the paper). The filter starts at the first baro sample; GPS samples before it are not used.
+not carry); the algorithm estimates no vertical speed, so vz_est is always 0. The filter starts
+at the first baro sample; GPS samples before it are not used.
+
+Deviations from the paper:
+
+* Eq. (11)'s P_S' is read as the undisturbed static pressure (measured + ½ρv²), which makes
+  the wind correction exact; the paper leaves it open, and reading it as the measured
+  pressure differs in the second order only. This reading is ours (the seeds' NOTES.md
+  discusses only Table 3's values).
+* η of eq. (14), which the paper does not define: the GPS error model above (seeds NOTES.md
+  asks for one).
+* GPS gate: a sample whose innovation exceeds ``gate_sigma`` standard deviations √(P + R_k)
+  is rejected and logged.
+* Baro gate: a baro sample that jumps from the last accepted one by more than ``gate_sigma``
+  standard deviations of the jump (2 R_baro and ``max_vz``) is rejected.
+* Health (estimators/base.py): a baro that stays off for ``reset_timeout`` while the GPS
+  agrees is isolated; with no height source fused for that long the estimate resets.
 
 Scenarios of the paper (for the systems that will reproduce them):
 
@@ -57,8 +71,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from altfusion.constants import G0, ISA_LAPSE_RATE, ISA_P0, ISA_T0, R_AIR
-from altfusion.estimators.base import BARO_P, GPS_QUALITY, Estimator, Stream
-from altfusion.estimators.kalman import predict, scalar_gate, update
+from altfusion.estimators.base import BARO_P, GPS_QUALITY, Estimator, HealthParams, Stream
+from altfusion.estimators.kalman import predict, update
 from altfusion.params import param
 from altfusion.physics.barometric import height_from_pressure
 
@@ -91,7 +105,7 @@ def gps_height_std(vdop: float, nsat: int, user_range_error: float, nsat_referen
 
 
 @dataclass(frozen=True)
-class BaoParams:
+class BaoParams(HealthParams):
     H0: float = param(0.0, "m", "Reference height H0 of the baro height formula (eq. 2); "
                                 "0: sea level, as in eq. (5)")
     p0: float = param(ISA_P0, "Pa", "Pressure P0 at H0 that the baro height formula assumes "
@@ -127,8 +141,10 @@ class BaoParams:
                                          "√(N_ref/N)", min=1)
     R_baro: float = param(0.01, "m2", "White-noise variance of the baro height (MS5611: 0.1 m, "
                                       "Table 1), added to h_std", min=0.0)
-    gate_sigma: float = param(5.0, "1", "Innovation gate on GPS in standard deviations "
-                                        "(0: off); not in the paper", min=0.0)
+    gate_sigma: float = param(5.0, "1", "Innovation gate on GPS, and on the jump of the baro "
+                                        "height since its last accepted sample (2 R_baro and "
+                                        "max_vz), in standard deviations (0: off); not in the "
+                                        "paper", min=0.0)
 
 
 class BaoDriftEstimator(Estimator):
@@ -143,8 +159,8 @@ class BaoDriftEstimator(Estimator):
         p = self.params
         self.x = np.zeros(1)
         self.P = np.array([[p.P0_drift]])
-        self.started = False
         self.h_baro = float(self.baro_h)
+        self._baro_time = float(self.baro_time)
         self.h_baro_corrected = self.h_baro
         self.principle_error = 0.0
         self.wind_error = 0.0
@@ -161,14 +177,23 @@ class BaoDriftEstimator(Estimator):
 
     def fuse(self, stream: Stream, sample: dict[str, float]) -> None:
         if stream is BARO_P:
-            self._correct_baro(sample["baro_h"], sample["baro_p"])
+            self._correct_baro(sample["baro_h"], sample["baro_p"], sample["baro_time"])
         elif self.started:
             self._drift_update(sample["gps_h"], sample["gps_vdop"], int(sample["gps_nsat"]))
         self._publish()
 
-    def _correct_baro(self, h_baro: float, p_baro: float) -> None:
-        """Principle (eq. 5) and wind (eq. 11) corrections of one baro sample."""
+    def _correct_baro(self, h_baro: float, p_baro: float, stamp: float) -> None:
+        """Principle (eq. 5) and wind (eq. 11) corrections of one baro sample, after the gate
+        on its jump from the last accepted one (not in the paper)."""
         p = self.params
+        if not self.started:
+            self.accept("baro")
+        else:
+            elapsed, self._baro_time = stamp - self._baro_time, stamp
+            if not self.gate("baro", h_baro - self.h_baro,
+                             self.jump_variance(p.R_baro, elapsed), p.gate_sigma):
+                return
+        self._baro_time = stamp
         H = self.h_est if self.started else h_baro       # "the altitude of the last time"
         self.principle_error = principle_error(H, p.H0, p.p0, p.T0, p.p0_actual, p.T0_actual,
                                                p.lapse_rate)
@@ -199,13 +224,20 @@ class BaoDriftEstimator(Estimator):
         z = h_gps - self.h_baro_corrected                                       # (13)
         innovation = z - float(self.x[0])
         variance = float(self.P[0, 0]) + R
-        if not scalar_gate(innovation, variance, p.gate_sigma):
-            self.reject(GPS_QUALITY, innovation, math.sqrt(variance))
+        if not self.gate("gps", innovation, variance, p.gate_sigma):
             return
         result = update(self.x, self.P, z, ONE, R)
         self.x, self.P = result.x, result.P
         self.R, self.gps_std = R, math.sqrt(R)
         self.innovation = innovation
+
+    def reset_height(self, source: str, innovation: float, variance: float) -> None:
+        """A baro reset takes the new baro level; a GPS reset moves the drift estimate."""
+        if source == "baro":
+            self.h_baro += innovation
+            self.h_baro_corrected += innovation
+        else:
+            self.x, self.P = self.x + innovation, np.array([[variance]])
 
     def _publish(self) -> None:
         self.drift = float(self.x[0])

@@ -1,12 +1,34 @@
-"""What every estimator shares: sensor streams, new-sample detection, guarded fusion, outputs.
+"""What every estimator shares: sensor streams, new-sample detection, guarded fusion, health.
 
 A sensor stream is a group of inputs named by the signal contract: the held sample values,
-``<prefix>_count`` and optionally a validity flag (``gps_fix``, ``radar_valid``...). A
-measurement update happens exactly once per new sample, i.e. when the count changes, whatever
-the estimator's own step; the time update runs at every step. A sample that is invalid or
-not finite is ignored and noted (logged by the FMU), so nothing propagates into the state.
-An estimator that needs the sample's time stamp uses the stream's :meth:`Stream.timed`
-variant, whose samples carry ``<prefix>_time`` like any other value.
+``<prefix>_count``, ``<prefix>_time`` (the sample's time stamp) and optionally a validity flag
+(``gps_fix``, ``radar_valid``...). A measurement update happens exactly once per new sample,
+i.e. when the count changes, whatever the estimator's own step; the time update runs at every
+step. A sample that is invalid or not finite is ignored and noted (logged by the FMU), so
+nothing propagates into the state. Every sample carries its stamp ``<prefix>_time`` among its
+values.
+
+Time stamps. An engine that steps slow components first (ECOS) shows the estimator a sample
+stamped ahead of its clock (a 10 Hz GPS sample of t = 0.10 s at t = 0.01 s). Such a sample is
+held until the estimator's clock reaches its stamp and fused then, so every engine fuses it at
+the same instant up to one estimator step. A stamp further ahead than ``max_sample_lead``, or
+not finite, is absurd: the sample is refused (counted in ``n_ignored`` and noted).
+
+Health (the signal contract's common outputs, PX4 EKF2's conventions):
+
+* ``<source>_test_ratio``: y²/(g²·S) of the source's last sample, innovation y, its variance S
+  and the gate g in standard deviations; > 1: rejected (0 while the gate is off);
+* ``<source>_rejected``: that source's samples rejected so far (``n_rejected``: all sources);
+* ``h_valid``: initialized and a height source fused within ``aiding_timeout``;
+* ``status``: the bits of :class:`Status` and, per source, those of :func:`source_bit`.
+
+Height reset (PX4's height reset, with ``fault_detection``): when a height sample is rejected
+and no height sample at all was fused for ``reset_timeout`` (every source disagrees with the
+prediction), the estimator resets its height to that sample (:meth:`Estimator.reset_height`)
+and counts it in ``n_height_resets``; a GPS vertical speed rejected for ``reset_timeout``
+resets the speed the same way (PX4's velocity reset). A source whose samples stay rejected for
+``reset_timeout`` while another source is fused is marked isolated in ``status`` until one of
+its samples passes the gate again.
 
 Inputs outside any stream (``extra_inputs``, e.g. ``wind_speed``) have no count: they are read
 with :meth:`Estimator.held_input`, which holds the last finite value over non-finite ones.
@@ -15,10 +37,12 @@ with :meth:`Estimator.held_input`, which holds the last finite value over non-fi
 import math
 from abc import abstractmethod
 from dataclasses import dataclass
+from enum import IntEnum, IntFlag
 from functools import cached_property
 from typing import ClassVar
 
 from altfusion.component import Component
+from altfusion.params import param
 
 
 @dataclass(frozen=True, eq=False)
@@ -41,15 +65,6 @@ class Stream:
     def time(self) -> str:
         return f"{self.prefix}_time"
 
-    @cached_property
-    def _timed(self) -> "Stream":
-        return Stream(self.prefix, (*self.values, self.time), self.valid)
-
-    def timed(self) -> "Stream":
-        """This stream with the sample's time stamp ``<prefix>_time`` (s) among its values
-        (one object per stream: streams compare by identity)."""
-        return self if self.time in self.values else self._timed
-
 
 BARO = Stream("baro", ("baro_h",))
 BARO_T = Stream("baro", ("baro_h", "baro_T"))
@@ -60,27 +75,111 @@ GPS_VZ = Stream("gps", ("gps_h", "gps_vz"), "gps_fix")
 ACC = Stream("acc", ("acc_z",))
 RADAR = Stream("radar", ("radar_h",), "radar_valid")
 LASER = Stream("laser", ("laser_h",), "laser_valid")
-BARO_TIMED = BARO.timed()
-GPS_VZ_TIMED = GPS_VZ.timed()
-RADAR_TIMED = RADAR.timed()
+
+HEIGHT_SOURCES = ("baro", "gps", "radar", "laser")
+"""The sources that aid the height (their fusion keeps ``h_valid`` true)."""
+
+SOURCES = (*HEIGHT_SOURCES, "gps_vz", "acc")
+"""Every source with a test ratio and a rejection count, in the order of their status bits."""
+
+PLAUSIBLE_RANGE = {"acc_z": ("acc", 160.0), "gps_vz": ("gps_vz", 1000.0),
+                   **{f"{source}_h": (source, 1e5) for source in HEIGHT_SOURCES}}
+"""Plausibility bounds of the sample values (source charged, largest magnitude): ±16 g, the
+full scale of common MEMS accelerometers; 1000 m/s, about Mach 3; ±100 km of height, the
+Kármán line. A value beyond its bound cannot be a measurement: the sample is rejected as
+that source's (test ratio value²/bound²) and takes no part in the step."""
+
+
+class Status(IntFlag):
+    """The estimator-wide bits of the ``status`` output (bits 0-7)."""
+
+    INITIALIZED = 1 << 0
+    """The filter has started (from its first usable sample)."""
+    DEAD_RECKONING = 1 << 1
+    """Initialized, but no height sample fused for ``aiding_timeout``: ``h_valid`` false."""
+    HEIGHT_RESET = 1 << 2
+    """The height was reset to a source in this step."""
+    SAMPLE_HELD = 1 << 3
+    """A sample stamped ahead of the estimator's clock waits until due."""
+
+
+class SourceBit(IntEnum):
+    """Per-source bits of ``status``: bit 8 + 4·i + this, i the source's index in
+    :data:`SOURCES`."""
+
+    FUSED = 0
+    """The source's last sample was fused."""
+    REJECTED = 1
+    """The source's last sample was rejected by its gate."""
+    ISOLATED = 2
+    """The height source is declared faulty: rejected for ``reset_timeout`` while another
+    height source that pins the height tighter was fused (height sources only)."""
+
+
+def source_bit(source: str, bit: SourceBit) -> int:
+    """The ``status`` mask of ``bit`` of ``source``."""
+    return 1 << (8 + 4 * SOURCES.index(source) + bit)
+
+
+def status_bits() -> dict[str, int]:
+    """Every documented ``status`` bit: name -> mask."""
+    bits = {flag.name: int(flag) for flag in Status}
+    bits.update({f"{source.upper()}_{bit.name}": source_bit(source, bit)
+                 for source in SOURCES for bit in SourceBit
+                 if bit is not SourceBit.ISOLATED or source in HEIGHT_SOURCES})
+    return bits
+
+
+@dataclass(frozen=True)
+class HealthParams:
+    """The parameters every estimator shares (health and sample timing); each estimator's
+    parameters extend these."""
+
+    aiding_timeout: float = param(5.0, "s", "h_valid turns false when no height sample was "
+                                            "fused for this long (PX4 EKF2: 5 s)", positive=True)
+    fault_detection: bool = param(True, None, "Height reset when every height source "
+                                              "disagrees and the isolation flags; false: the "
+                                              "paper's algorithm")
+    reset_timeout: float = param(2.5, "s", "A height source rejected this long while no "
+                                           "source is fused resets the height; rejected this "
+                                           "long while another is fused, it is isolated",
+                                 positive=True)
+    max_vz: float = param(50.0, "m/s", "Largest plausible vertical speed: bounds the jump of a "
+                                       "height between two samples where the estimator has "
+                                       "no speed state to predict it", positive=True)
+    max_sample_lead: float = param(1.0, "s", "A sample stamped at most this far ahead of the "
+                                             "estimator's clock is held until due; further: "
+                                             "refused", min=0.0)
 
 
 def stream_inputs(streams: tuple[Stream, ...]) -> tuple[str, ...]:
-    """The input names of ``streams`` in declaration order: values, count, validity flag."""
+    """The input names of ``streams`` in declaration order: values, count, time stamp,
+    validity flag."""
     names: list[str] = []
     for stream in streams:
-        for name in (*stream.values, stream.count, *((stream.valid,) if stream.valid else ())):
+        for name in (*stream.values, stream.count, stream.time,
+                     *((stream.valid,) if stream.valid else ())):
             if name not in names:
                 names.append(name)
     return tuple(names)
 
 
+def stream_sources(streams: tuple[Stream, ...]) -> tuple[str, ...]:
+    """The sources of ``streams`` in :data:`SOURCES` order: each stream's prefix, and
+    ``gps_vz`` for a stream carrying the GPS vertical speed."""
+    present = {s.prefix for s in streams} | {"gps_vz" for s in streams if "gps_vz" in s.values}
+    return tuple(source for source in SOURCES if source in present)
+
+
 class Estimator(Component):
-    """Base of the estimators: inputs from ``streams``, outputs ``h_est``, ``vz_est``, ``h_std``.
+    """Base of the estimators: inputs from ``streams``, outputs ``h_est``, ``vz_est``,
+    ``h_std`` and the health outputs.
 
     Subclasses implement :meth:`propagate` (time update over one step) and :meth:`fuse` (one
     new sample of one stream) or :meth:`fuse_samples` (all new samples of a step together),
-    and set ``h_est``, ``vz_est``, ``h_std`` and their diagnostics.
+    set ``started`` when the filter starts, ``h_est``, ``vz_est``, ``h_std`` and their
+    diagnostics; they pass each sample through :meth:`gate` (or :meth:`accept` for an
+    ungated one) and implement :meth:`reset_height`.
     """
 
     streams: ClassVar[tuple[Stream, ...]]
@@ -94,26 +193,43 @@ class Estimator(Component):
             for name in stream.values:
                 setattr(self, name, 0.0)
             setattr(self, stream.count, 0)
+            setattr(self, stream.time, 0.0)
             if stream.valid:
                 setattr(self, stream.valid, True)
         self.h_est = 0.0
         self.vz_est = 0.0
         self.h_std = 0.0
-        self.n_rejected = 0
-        self.n_ignored = 0
         super().__init__(params, **kwargs)
+
+    @classmethod
+    def sources(cls) -> tuple[str, ...]:
+        """The sources of this estimator's streams (test ratio and rejection count each)."""
+        return stream_sources(cls.streams)
 
     def reset(self) -> None:
         self._last_count = {s.prefix: getattr(self, s.count) for s in self.streams}
         self._seen = {prefix for prefix, count in self._last_count.items() if count > 0}
+        self._held: dict[Stream, dict[str, float]] = {}
         self.n_rejected = 0
         self.n_ignored = 0
+        self.n_height_resets = 0
+        self.started = False
+        for source in self.sources():
+            setattr(self, f"{source}_test_ratio", 0.0)
+            setattr(self, f"{source}_rejected", 0)
+        self._source_status = 0
+        self._rejected_since: dict[str, float] = {}
+        self._last_aiding = -math.inf
+        self._last_fused: dict[str, float] = {}
+        self._gate_width: dict[str, float] = {}
+        self._step_flags = Status(0)
         self._held_inputs: dict[str, float] = {}
         self._bad_inputs: set[str] = set()
         for name in self.extra_inputs:
             value = float(getattr(self, name))
             self._held_inputs[name] = value if math.isfinite(value) else 0.0
         self.initialize_filter()
+        self._publish_health()
 
     @abstractmethod
     def initialize_filter(self) -> None:
@@ -122,6 +238,12 @@ class Estimator(Component):
     @abstractmethod
     def propagate(self, dt: float) -> None:
         """Time update over one step of ``dt`` seconds."""
+
+    @abstractmethod
+    def reset_height(self, source: str, innovation: float, variance: float) -> None:
+        """Move the height estimate by ``innovation`` onto a sample of ``source`` whose
+        variance is ``variance`` (PX4's height reset): the height's variance becomes the
+        sample's, its correlations with the other states zero."""
 
     def fuse(self, stream: Stream, sample: dict[str, float]) -> None:
         """Measurement update with one new, valid, finite sample of ``stream``."""
@@ -133,6 +255,7 @@ class Estimator(Component):
             self.fuse(stream, sample)
 
     def update(self) -> None:
+        self._step_flags = Status(0)
         self.propagate(self.dt)
         samples = {}
         last_count = self._last_count
@@ -141,12 +264,22 @@ class Estimator(Component):
             if count != last_count[stream.prefix]:
                 sample = self._new_sample(stream, count)
                 if sample is not None:
-                    samples[stream] = sample
+                    self._held[stream] = sample
+            sample = self._held.get(stream)
+            if sample is not None and self._due(sample[stream.time]):
+                del self._held[stream]
+                samples[stream] = sample
         self.fuse_samples(samples)
+        self._publish_health()
+
+    def _due(self, stamp: float) -> bool:
+        """True if a sample stamped ``stamp`` is not ahead of the clock (rounding aside)."""
+        now = self.time
+        return stamp <= now + 1e-9 * max(1.0, abs(now))
 
     def _new_sample(self, stream: Stream, count: int) -> dict[str, float] | None:
-        """The sample of ``stream``, whose count changed to ``count``, if it is valid and
-        finite, else None."""
+        """The sample of ``stream``, whose count changed to ``count``, if it is valid, finite,
+        plausible and stamped at most ``max_sample_lead`` ahead, else None."""
         last = self._last_count[stream.prefix]
         self._last_count[stream.prefix] = count
         if count > last + 1:
@@ -154,14 +287,31 @@ class Estimator(Component):
                       f"estimator steps; only the latest is fused")
         if stream.valid and not getattr(self, stream.valid):
             return None
-        sample = {name: float(getattr(self, name)) for name in stream.values}
+        sample = {name: float(getattr(self, name)) for name in (*stream.values, stream.time)}
         if not all(map(math.isfinite, sample.values())):
             bad = {name: value for name, value in sample.items() if not math.isfinite(value)}
-            self.n_ignored += 1
-            self.note(f"{stream.prefix}: non-finite sample ignored {bad}")
+            self._ignore(stream, f"non-finite sample ignored {bad}")
             return None
+        lead = sample[stream.time] - self.time
+        if lead > self.params.max_sample_lead:
+            self._ignore(stream, f"sample stamped {lead:.4g} s ahead of the clock (more than "
+                                 f"max_sample_lead) refused")
+            return None
+        for name, value in sample.items():
+            source, bound = PLAUSIBLE_RANGE.get(name, (None, math.inf))
+            if abs(value) > bound:
+                self.gate(source, value, 1.0, 0.0, bound)
+                return None
+        if stream in self._held:
+            self.note(f"{stream.prefix}: a held sample was replaced before it was due")
+        if lead > 0.0:
+            self._step_flags |= Status.SAMPLE_HELD
         self._seen.add(stream.prefix)
         return sample
+
+    def _ignore(self, stream: Stream, message: str) -> None:
+        self.n_ignored += 1
+        self.note(f"{stream.prefix}: {message}")
 
     def has_sample(self, prefix: str) -> bool:
         """True once the stream ``prefix`` has delivered a valid sample (or had one at the
@@ -190,8 +340,103 @@ class Estimator(Component):
             self.note(f"{name}: non-finite sample ignored ({value}); holding {held!r}")
         return held
 
-    def reject(self, stream: Stream, innovation: float, sigma: float) -> None:
-        """Count and note a sample rejected by the innovation gate."""
+    # ------------------------------------------------------------------ health
+    def gate(self, source: str, innovation: float, variance: float, sigmas: float,
+             bound: float | None = None, aids_height: bool = True) -> bool:
+        """The innovation gate of ``source``: True if the sample may be fused.
+
+        test ratio = y²/(g²·S) (PX4), with g = ``sigmas`` standard deviations of the
+        innovation variance S (``sigmas <= 0``: no gate, ratio 0), or y²/``bound``² for a
+        plausibility bound on the value itself. A height sample rejected by its gate (never by
+        a bound) resets the height instead when no height source was fused for
+        ``reset_timeout`` (every source disagrees; with ``fault_detection``): then the sample
+        is consumed and False returned.
+        ``aids_height`` false: the source calibrates another (its fusion does not keep
+        ``h_valid`` true).
+        """
+        if bound is not None:
+            ratio = innovation * innovation / (bound * bound)
+        elif sigmas > 0.0:
+            ratio = innovation * innovation / (sigmas * sigmas * max(variance, 1e-300))
+        else:
+            ratio = 0.0
+        setattr(self, f"{source}_test_ratio", min(ratio, 1e300))
+        if ratio <= 1.0:
+            if bound is None and sigmas > 0.0:
+                self._gate_width[source] = sigmas * math.sqrt(max(variance, 0.0))
+            self.accept(source, aids_height)
+            return True
+        now, p = self.time, self.params
+        since = self._rejected_since.setdefault(source, now)
+        if bound is None and p.fault_detection and self.started and (
+                (source in HEIGHT_SOURCES and now - self._last_aiding >= p.reset_timeout
+                 and not self.contradicted(source, innovation))
+                or (source == "gps_vz" and now - since >= p.reset_timeout)):
+            self.reset_height(source, innovation, variance)
+            self.n_height_resets += 1
+            self._step_flags |= Status.HEIGHT_RESET
+            self.note(f"{source}: no height source fused for {now - self._last_aiding:.3g} s; "
+                      f"height reset by {innovation:.4g} m to this source "
+                      f"(reset {self.n_height_resets})")
+            self.accept(source)
+            return False
+        setattr(self, f"{source}_rejected", getattr(self, f"{source}_rejected") + 1)
         self.n_rejected += 1
-        self.note(f"{stream.prefix}: sample rejected by the innovation gate "
-                  f"(innovation {innovation:.4g} m, {abs(innovation) / sigma:.3g} sigma)")
+        self._mark(source, SourceBit.REJECTED)
+        if (now - since >= p.reset_timeout and self.contradicted(source, innovation)
+                and not self._source_status & source_bit(source, SourceBit.ISOLATED)):
+            self._source_status |= source_bit(source, SourceBit.ISOLATED)
+            self.note(f"{source}: rejected for {now - since:.3g} s while other sources are "
+                      f"fused: isolated until a sample passes the gate")
+        self.note(f"{source}: sample rejected (innovation {innovation:.4g}, test ratio "
+                  f"{ratio:.3g})")
+        return False
+
+    def jump_variance(self, noise_variance: float, elapsed: float) -> float:
+        """Variance of a height's jump from its last accepted sample, ``elapsed`` s after the
+        source's previous sample (accepted or not: a failed sensor's step stays rejected),
+        for an estimator without a speed state: twice the sample noise, plus the motion
+        ``max_vz`` allows counted as one standard deviation."""
+        return 2.0 * noise_variance + (self.params.max_vz * elapsed) ** 2
+
+    def accept(self, source: str, aids_height: bool = True) -> None:
+        """Record that a sample of ``source`` is fused (a height source aids the height unless
+        ``aids_height`` is false)."""
+        self._rejected_since.pop(source, None)
+        self._source_status &= ~source_bit(source, SourceBit.ISOLATED)
+        self._mark(source, SourceBit.FUSED)
+        if aids_height and source in HEIGHT_SOURCES:
+            self._last_aiding = self.time
+            self._last_fused[source] = self.time
+
+    def contradicted(self, source: str, innovation: float) -> bool:
+        """True if another height source, fused within ``reset_timeout`` and passing its
+        own gate since, pins the height tighter than ``innovation`` (its gate half-width
+        ``gate_sigma``·√S, with S its last innovation variance): then a sample of ``source``
+        that far from the prediction is the faulty one (with ``fault_detection``; else
+        False). A source too coarse to tell (a 3 m GPS against a 2 m terrain step under the
+        laser) contradicts nothing."""
+        if not (self.params.fault_detection and source in HEIGHT_SOURCES):
+            return False
+        now, timeout = self.time, self.params.reset_timeout
+        return any(other != source and now - fused <= timeout
+                   and abs(innovation) > self._gate_width.get(other, math.inf)
+                   for other, fused in self._last_fused.items())
+
+    def _mark(self, source: str, bit: SourceBit) -> None:
+        """Set ``bit`` (FUSED or REJECTED) of ``source`` and clear the other."""
+        fused, rejected = source_bit(source, SourceBit.FUSED), source_bit(source,
+                                                                         SourceBit.REJECTED)
+        self._source_status &= ~(fused | rejected)
+        self._source_status |= fused if bit is SourceBit.FUSED else rejected
+
+    def _publish_health(self) -> None:
+        """``h_valid`` and ``status`` at the end of a step."""
+        flags = self._step_flags
+        aided = self.time - self._last_aiding <= self.params.aiding_timeout
+        if self.started:
+            flags |= Status.INITIALIZED
+            if not aided:
+                flags |= Status.DEAD_RECKONING
+        self.h_valid = bool(self.started and aided)
+        self.status = int(flags) | self._source_status

@@ -9,16 +9,21 @@ States x = [h, vz, b]: altitude (m), vertical speed (m/s) and barometer bias (m)
     GPS:   z = h + v_G,      R_G constant
 
 Baro and GPS are each fused when a new sample arrives, at their own rates. The filter starts
-from its first sample (GPS if it comes first, else baro with zero bias); an innovation gate
-of ``gate_sigma`` standard deviations rejects outliers after that.
+from its first sample (GPS if it comes first, else baro with zero bias).
+
+Deviations from the papers' "normal Kalman filter" (which none of them specifies fully):
+
+* an innovation gate of ``gate_sigma`` standard deviations rejects outliers of either source;
+* health (estimators/base.py): a source rejected for ``reset_timeout`` while the other agrees
+  is isolated; with no source fused for that long the height resets onto the next sample.
 """
 
 from dataclasses import dataclass
 
 import numpy as np
 
-from altfusion.estimators.base import BARO, GPS, Estimator, Stream
-from altfusion.estimators.kalman import predict, scalar_gate, update
+from altfusion.estimators.base import BARO, GPS, Estimator, HealthParams, Stream
+from altfusion.estimators.kalman import predict, update
 from altfusion.params import param
 
 H_BARO = np.array([[1.0, 0.0, 1.0]])
@@ -26,7 +31,7 @@ H_GPS = np.array([[1.0, 0.0, 0.0]])
 
 
 @dataclass(frozen=True)
-class BaselineKFParams:
+class BaselineKFParams(HealthParams):
     accel_psd: float = param(0.5, "m2/s3", "PSD q_a of the white vertical acceleration",
                              positive=True)
     bias_psd: float = param(0.05, "m2/s", "PSD q_b of the baro-bias random walk", min=0.0)
@@ -52,7 +57,6 @@ class BaselineKF(Estimator):
         p = self.params
         self.x = np.zeros(3)
         self.P = np.diag([p.P0_h, p.P0_vz, p.P0_b])
-        self.started = False
         self.bias = 0.0
         self.innovation = 0.0
         self._publish()
@@ -79,17 +83,23 @@ class BaselineKF(Estimator):
         if not self.started:
             self.x[0] = z - self.x[2] if stream is BARO else z
             self.started = True
+            self.accept(stream.prefix)
             self._publish()
             return
         innovation = z - float((H @ self.x)[0])
         variance = float((H @ self.P @ H.T)[0, 0]) + R
-        if not scalar_gate(innovation, variance, p.gate_sigma):
-            self.reject(stream, innovation, variance**0.5)
+        if not self.gate(stream.prefix, innovation, variance, p.gate_sigma):
+            self._publish()
             return
         result = update(self.x, self.P, z, H, R)
         self.x, self.P = result.x, result.P
         self.innovation = float(result.innovation[0])
         self._publish()
+
+    def reset_height(self, source: str, innovation: float, variance: float) -> None:
+        self.x[0] += innovation
+        self.P[0, :] = self.P[:, 0] = 0.0
+        self.P[0, 0] = variance
 
     def _publish(self) -> None:
         self.h_est, self.vz_est, self.bias = (float(v) for v in self.x)

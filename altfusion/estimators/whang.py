@@ -13,17 +13,26 @@ Fig. 1 of the paper, block by block:
 * baro-error compensation: h^c = H0 + (h^B - H0 - b̂)/(1 + â) (eq. 32) filtered by the
   alpha-beta Kalman filter of eqs. (33)-(34) with R_h = ((h^c - H0)² P^a + P^b + R^B)/(1 + â)².
 
-Sign of λ (NOTES.md): in a physically simulated atmosphere a warmer day than the calibration
-makes the barometer read low, h^B - H0 ≈ (1 - ΔT/T0)(h - H0), so the scale factor is
-a ≈ -ΔT/T0, opposite to eq. (3). With ``paper_lambda_sign`` false (default) the
-pseudo-measurement takes the physical sign s = -1; true restores the paper's eq. (6), s = +1.
-
-GPS samples that arrive before the first air-data sample are not fused (z needs h^B; in a
-replayed log GPS may come first).
-
 Rates: the alpha-beta filter and the random walks propagate at the estimator's own step (their
 noises, given per air-data step Δt^B, are scaled by dt/Δt^B); with the estimator stepped at
 Δt^B this is exactly the paper's filter.
+
+Deviations from the paper:
+
+* Sign of λ (seeds NOTES.md): a warmer day than the calibration makes the barometer read low,
+  h^B - H0 ≈ (1 - ΔT/T0)(h - H0), so a ≈ -ΔT/T0, opposite to eq. (3). ``paper_lambda_sign``
+  false (default) takes the physical sign s = -1; true restores eq. (6), s = +1.
+* GPS gate: a z-update whose innovation exceeds ``gate_sigma`` standard deviations
+  √(P^b + R + (h^GPS - H0)² P^a) is rejected.
+* (As in the paper) no baro gate: the scenario's weather steps the baro height by up to
+  ~100 m between two samples, which the bias random walk (Q_b = 400 m² per step) is built to
+  follow; a wild sample gets the small gain of its large R_h, an absurd one the base's
+  plausibility bound.
+* ``MIN_LEVER``: below 1 m of h^GPS - H0 the scale-factor update of eqs. (23)-(26) is skipped
+  (z_a = (z - b̂)/(h^GPS - H0) would divide by a vanishing lever); the bias update runs.
+* GPS samples that arrive before the first air-data sample are not fused (z needs h^B; in a
+  replayed log GPS may come first).
+* Health (estimators/base.py): the GPS calibrates the baro and does not aid the height.
 """
 
 from dataclasses import dataclass
@@ -31,18 +40,19 @@ from dataclasses import dataclass
 import numpy as np
 
 from altfusion.constants import ISA_LAPSE_RATE, ISA_T0
-from altfusion.estimators.base import BARO_T, GPS, Estimator
-from altfusion.estimators.kalman import predict, scalar_gate, update
+from altfusion.estimators.base import BARO_T, GPS, Estimator, HealthParams
+from altfusion.estimators.kalman import predict, update
 from altfusion.params import param
 
 ONE = np.array([[1.0]])
 H_ALPHA_BETA = np.array([[1.0, 0.0]])
 MIN_LEVER = 1.0
-"""Below this height above H0 (m) the GPS carries no scale-factor information (eq. 23)."""
+"""Below this height above H0 (m) the GPS carries no scale-factor information (eq. 23): a
+deviation from the paper (module documentation)."""
 
 
 @dataclass(frozen=True)
-class WhangParams:
+class WhangParams(HealthParams):
     H0: float = param(0.0, "m", "Launch height of the baro calibration")
     T0: float = param(ISA_T0, "K", "Launch temperature of the baro calibration")
     lapse_rate: float = param(ISA_LAPSE_RATE, "K/m", "Nominal lapse rate Γ̂")
@@ -66,8 +76,8 @@ class WhangParams:
                               positive=True)
     paper_lambda_sign: bool = param(False, None, "λ with the sign of eq. (6) instead of "
                                                  "the physical sign (see NOTES.md)")
-    gate_sigma: float = param(5.0, "1", "Innovation gate on GPS in standard deviations "
-                                        "(0: off)", min=0.0)
+    gate_sigma: float = param(5.0, "1", "Innovation gate on GPS (z-update) in standard "
+                                        "deviations (0: off); not in the paper", min=0.0)
 
 
 class WhangGAEstimator(Estimator):
@@ -82,7 +92,6 @@ class WhangGAEstimator(Estimator):
         self.b, self.P_b = 0.0, p.P0_b
         self.x = np.array([p.H0, 0.0])
         self.P = np.diag([p.P0_h, p.P0_vz])
-        self.started = False
         self.h_prior = p.H0
         self.h_comp = p.H0
         self.lambda_meas = 0.0
@@ -106,6 +115,7 @@ class WhangGAEstimator(Estimator):
         """Air data: λ-update; GPS: z-update; then compensation with the latest estimates."""
         air_data, gps = samples.get(BARO_T), samples.get(GPS)
         if air_data is not None:
+            self.accept("baro")
             self.baro = air_data["baro_h"]
             self._lambda_update(air_data["baro_T"])
         if gps is not None and not self.has_sample("baro"):
@@ -136,8 +146,8 @@ class WhangGAEstimator(Estimator):
         z = self.baro - h_gps
         lever = h_gps - p.H0
         innovation = z - lever * self.a - self.b
-        if not scalar_gate(innovation, self.P_b + R + lever**2 * self.P_a, p.gate_sigma):
-            self.reject(GPS, innovation, (self.P_b + R + lever**2 * self.P_a) ** 0.5)
+        if not self.gate("gps", innovation, self.P_b + R + lever**2 * self.P_a, p.gate_sigma,
+                         aids_height=False):
             return
         if abs(lever) >= MIN_LEVER:
             z_a = (z - self.b) / lever                                          # (23)
@@ -150,18 +160,28 @@ class WhangGAEstimator(Estimator):
         self.b = float(result.x[0])
         self.P_b = float(result.P[0, 0]) + (gain * lever) ** 2 * self.P_a       # (31)
 
+    def _compensated(self, h_baro: float) -> tuple[float, float]:
+        """Eq. (32) and the R_h of eq. (34): h^c and its variance."""
+        p = self.params
+        h_comp = p.H0 + (h_baro - p.H0 - self.b) / (1.0 + self.a)               # (32)
+        R_h = (((h_comp - p.H0) ** 2 * self.P_a + self.P_b + p.R_baro)
+               / (1.0 + self.a) ** 2)
+        return h_comp, R_h
+
     def _compensate(self) -> None:
         """Eq. (32) and the alpha-beta filter update (eq. 34) with its R_h."""
-        p = self.params
-        self.h_comp = p.H0 + (self.baro - p.H0 - self.b) / (1.0 + self.a)       # (32)
+        self.h_comp, R_h = self._compensated(self.baro)
         if not self.started:
             self.x = np.array([self.h_comp, 0.0])
             self.started = True
             return
-        R_h = (((self.h_comp - p.H0) ** 2 * self.P_a + self.P_b + p.R_baro)
-               / (1.0 + self.a) ** 2)
         result = update(self.x, self.P, self.h_comp, H_ALPHA_BETA, R_h)
         self.x, self.P = result.x, result.P
+
+    def reset_height(self, source: str, innovation: float, variance: float) -> None:
+        """Only the GPS is gated (the baro passes ungated, see the deviations): b̂ moves onto
+        it."""
+        self.b, self.P_b = self.b + innovation, variance
 
     def _publish(self) -> None:
         self.h_est = float(self.x[0])

@@ -1,87 +1,58 @@
 """XuSHAEKF: the improved Sage-Husa adaptive Kalman filter of Xu et al. (seed 004, Fig. 7).
 
-State and model (Section 2.1). x = [h, vz, b_a, ε_b]: altitude, vertical speed, accelerometer
-bias and the barometer's constant error ε_b of eqs. (4) and (14). The accelerometer is the
-input u of eqs. (8)-(10) (gravity already removed, ``acc_z``): with the fusion cycle T_s = dt,
+State and model (Section 2.1): x = [h, vz, b_a, ε_b], altitude, vertical speed, accelerometer
+bias and the barometer's constant error ε_b of eqs. (4), (14). The accelerometer ``acc_z`` is
+the input u of eqs. (8)-(10); with the fusion cycle T = dt
 
     x_k = Φ x_{k-1} + B u_{k-1} + Γ W_{k-1},   Φ = [[1, T, -T²/2, 0], [0, 1, -T, 0],
                                                    [0, 0, 1, 0], [0, 0, 0, 1]],
     B = Γ = [T²/2, T, 0, 0]ᵀ                                                   (10), (11)
 
-so eq. (19) carries the input term B·u that the paper dropped (NOTES.md), and the
-double-integrated accelerometer altitude is not a measurement (the "MEMS" row of eq. 14
-diverges, NOTES.md). Additions: b_a, which the realistic MEMS bias of NOTES.md calls for
-(a random walk of ``acc_bias_psd``), and a random walk of ``baro_bias_psd`` on ε_b, so that a
-barometer that is not being calibrated against GPS grows honestly uncertain.
+Measurements (eq. 14): GPS z = h at every GPS sample; the active height source, the laser
+(z = laser_h + ``terrain_h``, H = [1, 0, 0, 0]) below ``switch_h`` above the terrain, the
+barometer (z = h + ε_b, H = [1, 0, 0, 1]) above it, with ``switch_hysteresis`` and
+``laser_timeout``; output ``height_source``: 0 = barometer, 1 = laser.
 
-Measurements (eq. 14): GPS z = h + ω_g at every GPS sample; the active height source is the
-laser (z = laser_h + ``terrain_h``, H = [1, 0, 0, 0]) below ``switch_h`` = 25 m above the
-terrain and the barometer (z = h + ε_b, H = [1, 0, 0, 1]) above it. Hysteresis: the laser
-hands over to the baro when the estimated height above the terrain exceeds ``switch_h`` or no
-valid laser sample came for ``laser_timeout``; the baro hands back when the height is below
-``switch_h - switch_hysteresis`` and the laser is valid. The active source is the Integer output
-``height_source``: 0 = barometer, 1 = laser.
+Each measurement of sensor x is one scalar update (Section 2.3), the nominal R_k (``R_gps``,
+``R_baro``, ``R_laser``) in the theoretical innovation variance and the convergence test, the
+estimate R̂_k in the gain:
 
-Each measurement of sensor x (gps, baro, laser) is one scalar update, in the order of Section
-2.3 with the additions marked. The paper keeps two noise levels apart, and so does this
-filter: the sensor's nominal R_k (parameters ``R_gps``, ``R_baro``, ``R_laser``) in the
-theoretical innovation variance of eq. (16) and in the convergence criterion of eq. (23), and
-the estimate R̂_k of eq. (22) in the gain of eq. (25). A divergence or a failing sensor that
-the estimate R̂ absorbs thus still shows against the nominal R.
-
-1. innovation v = z - H x⁻ (eq. 20) and its theoretical variance C = H P⁻ Hᵀ + R_k (eq. 16);
-2. data analysis (Section 2.2, eqs. 15-18): α_C = √(mean of v²/C over the sensor's last N
-   innovations), the ratio of actual to theoretical innovation spread of eqs. (15)-(17) (each
-   innovation normalised by its own C, which equals eq. 15 over eq. 16 while C is steady), and
-   the sensor weight α = min(1, (c/α_C)²): 1 while the sensor behaves (α_C ≈ 1), falling as the
-   square of the excess otherwise (the bounded mapping of NOTES.md for eq. 18);
-3. (addition) gate: a sample with v² > ``gate_sigma``²·(H P⁻ Hᵀ + R̂) is rejected and logged;
-   its innovation still enters the window of step 2, so a failing sensor loses weight. After
-   ``max_rejections`` consecutive rejections of the active height source (a real jump, e.g. of
-   the terrain under the laser) its next sample is re-acquired: accepted with a fresh window
-   (and strong tracking, since it fails eq. 23);
-4. measurement noise (eq. 22) R̂_k = (1-β_k) R̂_{k-1} + β_k [(1 - H K_{k-1})² v² + H P_{k-1} Hᵀ],
-   the post-fit residual's spread plus the posterior variance, with the fading factor of
-   eq. (28) β_k = β_{k-1}/(β_{k-1} + b), one sequence per sensor (NOTES.md) and β = 1 before
-   the first sample, so the nominal R carries the weight of one sample (β_k tends to 1 - b).
-   In a multi-rate filter the sensor's previous gain belongs to another prior, so K_{k-1} and
-   P_{k-1} are read as the gain and posterior this sample would get with R̂_{k-1}: same fixed
-   point (R̂ = R makes the bracket's mean R), and a sensor's first innovations, which carry the
-   state's error as much as its noise (a hand-over from baro to laser), do not blow R̂ up;
-5. convergence criterion (eq. 23) v² ≤ γ·(H P⁻ Hᵀ + R_k), checked on the active height source
-   (a diverging state shows in the primary height measurement; on GPS strong tracking would
-   hand a full gain to the least accurate sensor). If it fails, eq. (24) with the strong
-   tracking filter's suboptimal fading factor λ = max(1, (v² - R_k)/H P⁻ Hᵀ) (Ref. 13), which
-   makes the predicted innovation variance match v²: P⁻ ← λ P⁻ on the states the innovation
-   can correct (h, vz, b_a, and ε_b when the baro is measured; ε_b is unobserved under the
-   laser and would otherwise grow without bound), λ at most ``MAX_FADING`` per step;
-6. gain K = P⁻Hᵀ/(H P⁻ Hᵀ + R̂) (eq. 25), x = x⁻ + α K v (eq. 26) and the Joseph form of eq.
-   (27) for the gain actually used (α K);
-7. system noise (step 8 of Section 2.3): Q̂ = B σ̂_a² Bᵀ with σ̂_a² the accelerometer noise
-   variance estimated in real time from its last ``acc_window`` samples, mean((Δa)²)/2 (first
-   differences cancel the slowly varying true acceleration), never below the nominal
-   ``acc_noise_std``².
-
-The convergence threshold γ (not given in the paper) is a false-alarm threshold: while the
-filter converges v²/(H P⁻ Hᵀ + R) follows χ² with one degree of freedom. P(χ²₁ > 4) = 4.6 %:
-with γ = 4 a 50-100 Hz height source triggers strong tracking several times a second on plain
-noise, each time inflating P toward the measurement noise (NOTES.md; at 35 m the error reaches
-several metres). γ = 16 (4σ) gives P = 6·10⁻⁵, about one false alarm every five minutes at
-50 Hz, each harmless, while a real divergence (an accelerometer bias jump) is caught within a
-few samples. Strong tracking is not optional: without it, a divergence makes α fall and R̂
-grow along with the innovations, the filter stops listening to its height source and runs
-away (tests/test_estimators_xu.py).
+1. v = z - H x⁻ (eq. 20), C = H P⁻ Hᵀ + R_k (eq. 16);
+2. data analysis (eqs. 15-18): α_C = √(mean of v²/C over the sensor's last N innovations),
+   weight α = min(1, (c/α_C)²);
+3. gate (a deviation, below);
+4. R̂_k = (1-β_k) R̂_{k-1} + β_k [(1 - H K_{k-1})² v² + H P_{k-1} Hᵀ] (eq. 22), fading factor
+   β_k = β_{k-1}/(β_{k-1} + b) (eq. 28) per sensor, β = 1 before the first sample;
+5. convergence test v² ≤ γ (H P⁻ Hᵀ + R_k) (eq. 23) on the active height source; if it fails,
+   strong tracking P⁻ ← λ P⁻ (eq. 24), λ = max(1, (v² - R_k)/H P⁻ Hᵀ);
+6. K = P⁻Hᵀ/(H P⁻ Hᵀ + R̂) (eq. 25), x = x⁻ + α K v (eq. 26), Joseph form of eq. (27) for
+   the gain α K;
+7. system noise (step 8): Q̂ = B σ̂_a² Bᵀ, σ̂_a² = mean((Δa)²)/2 over the last ``acc_window``
+   accelerometer samples, never below ``acc_noise_std``².
 
 With ``adaptive`` false the filter is the "Kalman filter improved before" of Figs. 10-11: the
 same model and gate with the nominal R and Q, α = 1 and no strong tracking.
 
-Scenarios of the paper (Section 3): profiles ``xu_hover15`` (hover at 15 m, GPS failing
-suddenly), ``xu_hover35`` (35 m: laser out of range, reading 0) and ``xu_multipoint`` (10, 22,
-37 m within 1000 s; Section 3.2's bounds: error ≤ 1 m below 25 m and ≤ 1.2 m above without
-wind, 1.1 / 1.5 m with wind grade 3); sensors with realistic noise since the paper gives none
-(NOTES.md): LaserRangefinder at 100 Hz, ±5 mm, 0.1-25 m; AirDataModule with a MEMS baro of
-0.5 m; GnssReceiver at 5 Hz with a few metres; Accelerometer at 100 Hz with 0.05 m/s² noise
-and a residual bias of a few 0.01 m/s²; the estimator stepped at the accelerometer's period.
+Deviations from the paper (the reasons in docs/estimators.md):
+
+* eq. (19) carries the input term B·u the paper dropped; the accelerometer is the input, not
+  the double-integrated "MEMS" measurement row of eq. (14) (seeds NOTES.md);
+* states b_a (random walk ``acc_bias_psd``) and a random walk ``baro_bias_psd`` on ε_b;
+* α_C averages each innovation normalised by its own C; α = min(1, (c/α_C)²) is the bounded
+  mapping of eq. (18) (seeds NOTES.md), with α = 1 for α_C ≤ c (no division by α_C = 0);
+* K_{k-1}, P_{k-1} of eq. (22) are read as this sample's gain and posterior with R̂_{k-1};
+* γ = 16 (not given in the paper); strong tracking scales h, vz and b_a, and ε_b only on a
+  baro sample, at most ``MAX_FADING`` per step;
+* gate: a sample with v² > ``gate_sigma``²·(H P⁻ Hᵀ + R̂) is rejected (its innovation still
+  enters the window of step 2); after ``max_rejections`` consecutive rejections the active
+  height source is re-acquired, unless another source contradicts it (estimators/base.py);
+* health (estimators/base.py): a height source rejected for ``reset_timeout`` while another
+  agrees is isolated; with no source fused for that long the height resets.
+
+Scenarios (Section 3): profiles ``xu_hover15``, ``xu_hover35`` and ``xu_multipoint`` (bounds of
+Section 3.2: error ≤ 1 m below 25 m, ≤ 1.2 m above, 1.1 / 1.5 m with wind grade 3); realistic
+sensors since the paper gives none (seeds NOTES.md): laser 100 Hz ±5 mm 0.1-25 m, MEMS baro
+0.5 m, GNSS 5 Hz a few metres, accelerometer 100 Hz 0.05 m/s² with a bias of a few 0.01 m/s².
 """
 
 import math
@@ -90,7 +61,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from altfusion.estimators.base import ACC, BARO, GPS, LASER, Estimator, Stream
+from altfusion.estimators.base import ACC, BARO, GPS, LASER, Estimator, HealthParams, Stream
 from altfusion.estimators.kalman import predict, update
 from altfusion.params import param
 
@@ -106,7 +77,7 @@ MAX_FADING = 1000.0
 
 
 @dataclass(frozen=True)
-class XuParams:
+class XuParams(HealthParams):
     R_gps: float = param(9.0, "m2", "Nominal GPS height variance R (3 m: a few metres, "
                                     "NOTES.md)", positive=True)
     R_baro: float = param(0.25, "m2", "Nominal baro height variance (MEMS baro: 0.5 m)",
@@ -196,7 +167,6 @@ class XuSHAEKF(Estimator):
         p = self.params
         self.x = np.zeros(4)
         self.P = np.diag([p.R_baro, p.P0_vz, p.acc_bias_std**2, p.baro_bias_std**2])
-        self.started = False
         self.u = 0.0
         self._acc_last: float | None = None
         self._acc_diffs: deque = deque(maxlen=p.acc_window)
@@ -231,6 +201,7 @@ class XuSHAEKF(Estimator):
     def fuse_samples(self, samples: dict[Stream, dict[str, float]]) -> None:
         p = self.params
         if ACC in samples:
+            self.accept("acc")
             self._accelerometer(samples[ACC]["acc_z"])
         if LASER in samples:
             self._last_laser_time = self.time
@@ -269,21 +240,23 @@ class XuSHAEKF(Estimator):
         channel = self.channels[name]
         if not self.started:
             self._start(z, H, channel.R_hat)
+            self.accept(name)
             return
         innovation = z - float((H @ self.x)[0])                                 # (20)
         hph = float((H @ self.P @ H.T)[0, 0])
         ratio = channel.innovation_ratio(innovation**2 / (hph + channel.R_nominal))  # (15)-(17)
-        if p.adaptive:
-            channel.weight = min(1.0, (p.weight_c / ratio) ** 2)                # (18)
+        if p.adaptive:       # (18), α = min(1, (c/α_C)²) without dividing by α_C = 0
+            channel.weight = 1.0 if ratio <= p.weight_c else (p.weight_c / ratio) ** 2
         C = hph + channel.R_hat
         active = name != "gps"
-        if p.gate_sigma > 0.0 and innovation**2 > p.gate_sigma**2 * C:
+        if not self.gate(name, innovation, C, p.gate_sigma):
             channel.rejections += 1
-            if not (active and channel.rejections > p.max_rejections):
-                self.reject(self._stream(name), innovation, math.sqrt(C))
+            if not (active and channel.rejections > p.max_rejections
+                    and not self.contradicted(name, innovation)):
                 return
             self.note(f"{name}: re-acquired after {p.max_rejections} consecutive rejections "
                       f"(innovation {innovation:.4g} m)")
+            self.accept(name)
             channel.window.clear()
             channel.weight = 1.0
         channel.rejections = 0
@@ -318,9 +291,10 @@ class XuSHAEKF(Estimator):
         self.P[0, 3] = self.P[3, 0] = -H[0, 3] * self.P[3, 3]
         self.started = True
 
-    @staticmethod
-    def _stream(name: str) -> Stream:
-        return {"gps": GPS, "baro": BARO, "laser": LASER}[name]
+    def reset_height(self, source: str, innovation: float, variance: float) -> None:
+        self.x[0] += innovation
+        self.P[0, :] = self.P[:, 0] = 0.0
+        self.P[0, 0] = variance
 
     def _publish(self) -> None:
         self.h_est, self.vz_est, self.acc_bias, self.baro_bias = (float(v) for v in self.x)

@@ -25,16 +25,22 @@ estimator, and at each step the rows of Ψ = H·Ω + δ (H = I) for which a samp
 fused height (σ_y²), the GPS vertical speed (σ_v²) and the IMU acceleration (σ_a²): eqs. 12-14
 in Joseph form, the independent rows applied one after the other (the joint update, for a
 diagonal R), in the shared machinery's scalar arithmetic (a 3-state filter stepped at 100 Hz,
-where numpy's per-call overhead would dominate). The paper's filter has no process noise
-(eq. 11); taken literally it cannot follow the trajectory's acceleration steps (NOTES.md), so
-eq. (11) gets a white-jerk process noise of spectral density ``jerk_psd`` (an addition,
-Q = q·∫ φφᵀ with φ = [t²/2, t, 1]). The filter starts at the first fusion with h = y,
-Var h = σ_y².
+where numpy's per-call overhead would dominate). The filter starts at the first fusion with
+h = y, Var h = σ_y².
 
-Additions for robustness: a height sample whose difference from the filter's predicted height
-exceeds ``gate_sigma`` standard deviations √(P_hh + σ_i²) is rejected and logged before it
-enters the fusion (GPS vertical speed and acceleration are not gated: acceleration steps are
-real); invalid and non-finite samples are ignored (the Estimator base).
+Deviations from the paper:
+
+* process noise: the paper's filter has none (eq. 11); taken literally it cannot follow the
+  trajectory's acceleration steps (seeds NOTES.md), so eq. (11) gets a white-jerk process
+  noise of spectral density ``jerk_psd``, Q = q·∫ φφᵀ with φ = [t²/2, t, 1];
+* gates: a height sample whose difference from the predicted height exceeds ``gate_sigma``
+  standard deviations √(P_hh + σ_i²) is rejected before it enters the fusion, and so is a GPS
+  vertical speed against √(P_vv + σ_v²) (rejected for ``reset_timeout``, the speed resets onto
+  the GPS; gate and reset only with ``fault_detection``); the acceleration gets the base's
+  plausibility bound only (acceleration steps are real);
+* health (estimators/base.py): a height source rejected for ``reset_timeout`` while another
+  agrees is isolated; with every height source rejected that long the height resets onto the
+  next sample (the overconfident prediction can no longer lock the measurements out).
 
 Scenario of the paper (Section 4): profile ``yang2020`` (climb, cruise at 1440 m, descent over
 420 s, reference altitude sea level); GnssReceiver every 100 ms with σ_h = 30 m
@@ -49,10 +55,9 @@ import math
 from collections import deque
 from dataclasses import dataclass
 
-from altfusion.estimators.base import ACC, BARO_TIMED, GPS_VZ_TIMED, RADAR_TIMED, Estimator
+from altfusion.estimators.base import ACC, BARO, GPS_VZ, RADAR, Estimator, HealthParams
 from altfusion.estimators.kalman import (
     predict_constant_acceleration,
-    scalar_gate,
     update_state_component,
     white_jerk_noise,
 )
@@ -62,9 +67,9 @@ HEIGHT_SENSORS = ("radar", "gps", "baro")
 """The height sensors in benchmark order: largest sampling period first (Section 4.2)."""
 
 
-HEIGHT_STREAMS = (("baro", BARO_TIMED, "baro_h", "baro_time"),
-                  ("gps", GPS_VZ_TIMED, "gps_h", "gps_time"),
-                  ("radar", RADAR_TIMED, "radar_h", "radar_time"))
+HEIGHT_STREAMS = (("baro", BARO, "baro_h", "baro_time"),
+                  ("gps", GPS_VZ, "gps_h", "gps_time"),
+                  ("radar", RADAR, "radar_h", "radar_time"))
 """Each height sensor's stream, height input and time-stamp input."""
 
 
@@ -86,7 +91,7 @@ def weighted_fusion(heights: dict[str, float], variances: dict[str, float],
 
 
 @dataclass(frozen=True)
-class YangParams:
+class YangParams(HealthParams):
     R_gps: float = param(900.0, "m2", "GPS height variance σ_GPS² (Section 4.2: 30 m)",
                          positive=True)
     R_baro: float = param(400.0, "m2", "Baro height variance σ_ba² (Section 4.2: 20 m)",
@@ -107,8 +112,9 @@ class YangParams:
     P0_vz: float = param(100.0, "m2/s2", "Initial vertical-speed variance", positive=True)
     P0_az: float = param(1.0, "m2/s4", "Initial acceleration variance", positive=True)
     gate_sigma: float = param(5.0, "1", "Gate on each height sample against the predicted "
-                                        "height, in standard deviations (0: off); not in the "
-                                        "paper", min=0.0)
+                                        "height and on the GPS vertical speed against the "
+                                        "predicted speed, in standard deviations (0: off); not "
+                                        "in the paper", min=0.0)
 
 
 class YangFusionKF(Estimator):
@@ -116,13 +122,12 @@ class YangFusionKF(Estimator):
     GPS/baro/radio-altimeter heights and a height/speed/acceleration Kalman filter."""
 
     Params = YangParams
-    streams = (BARO_TIMED, GPS_VZ_TIMED, RADAR_TIMED, ACC)
+    streams = (BARO, GPS_VZ, RADAR, ACC)
 
     def initialize_filter(self) -> None:
         p = self.params
         self.x = (0.0, 0.0, 0.0)
         self.P = ((p.R_baro, 0.0, 0.0), (0.0, p.P0_vz, 0.0), (0.0, 0.0, p.P0_az))
-        self.started = False
         self.history = {name: deque(maxlen=2) for name in HEIGHT_SENSORS}
         self.variances = {"radar": p.R_radar, "gps": p.R_gps, "baro": p.R_baro}
         self.h_fused = 0.0
@@ -154,7 +159,7 @@ class YangFusionKF(Estimator):
                 self._stale.add(name)
                 self.note(f"{name}: sample stamped {sample[stamp]!r} s arrives older than "
                           f"max_sample_age; it cannot take part in a fusion (is {stamp} set?)")
-            if self._gate(name, stream, z):
+            if self._gate(name, z):
                 self.history[name].append((sample[stamp], z))
                 arrived.add(name)
         measurements = []                   # (state component measured, value, variance)
@@ -165,11 +170,12 @@ class YangFusionKF(Estimator):
                 measurements.append((0, self.h_fused, self.fused_std**2))
             else:
                 self._start()
-        gps = samples.get(GPS_VZ_TIMED)
-        if gps is not None:
+        gps = samples.get(GPS_VZ)
+        if gps is not None and self._speed_passes(gps["gps_vz"]):
             measurements.append((1, gps["gps_vz"], p.R_gps_vz))
         acc = samples.get(ACC)
         if acc is not None:
+            self.accept("acc")
             measurements.append((2, acc["acc_z"], p.R_acc))
         x, P = self.x, self.P                    # (12)-(14), H = I: the rows one by one
         for index, z, R in measurements:
@@ -177,16 +183,40 @@ class YangFusionKF(Estimator):
         self.x, self.P = x, P
         self._publish()
 
-    def _gate(self, name: str, stream, z: float) -> bool:
+    def _gate(self, name: str, z: float) -> bool:
         """True if the height sample may enter the fusion (always before the filter starts)."""
         if not self.started:
+            self.accept(name)
             return True
-        innovation = z - self.x[0]
-        variance = self.P[0][0] + self.variances[name]
-        if scalar_gate(innovation, variance, self.params.gate_sigma):
+        return self.gate(name, z - self.x[0], self.P[0][0] + self.variances[name],
+                         self.params.gate_sigma)
+
+    def _speed_passes(self, vz: float) -> bool:
+        """The gate on the GPS vertical speed against the predicted speed (not in the paper;
+        none before the filter starts, whose speed is then a guess). The speed variance is
+        overconfident at a closed-loop take-off: after ``reset_timeout`` of rejections the
+        speed resets onto the GPS (base machinery). Gate and reset come together: with
+        ``fault_detection`` false the speed is fused ungated, as in the paper."""
+        if not (self.started and self.params.fault_detection):
+            self.accept("gps_vz")
             return True
-        self.reject(stream, innovation, math.sqrt(variance))
-        return False
+        return self.gate("gps_vz", vz - self.x[1], self.P[1][1] + self.params.R_gps_vz,
+                         self.params.gate_sigma)
+
+    def reset_height(self, source: str, innovation: float, variance: float) -> None:
+        """A GPS speed reset moves the speed onto the sample. A height reset: height onto the
+        sample; speed and acceleration back to their initial variances: a
+        prediction that drifted out of every gate had an overconfident speed and acceleration
+        (a biased accelerometer fused as a measurement of the acceleration)."""
+        h, vz, az = self.x
+        p = self.params
+        if source == "gps_vz":
+            (p00, p01, p02), _, (_, p12, p22) = self.P
+            self.x = (h, vz + innovation, az)
+            self.P = ((p00, 0.0, p02), (0.0, variance, 0.0), (p02, 0.0, p22))
+            return
+        self.x = (h + innovation, vz, az)
+        self.P = ((variance, 0.0, 0.0), (0.0, p.P0_vz, 0.0), (0.0, 0.0, p.P0_az))
 
     def _benchmark(self, now: float) -> str | None:
         """The first live height sensor in order of decreasing sampling period (Section 4.2)."""

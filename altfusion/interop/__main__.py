@@ -18,10 +18,37 @@ from pathlib import Path
 
 import numpy as np
 
+from altfusion.cosim.results import Results
+
+
+def run_engine(engine: str, ssp: Path, stop_time: float | None = None,
+               osp: Path | None = None) -> Results:
+    """Run the system of ``ssp`` in ``engine`` (``libcosim-osp`` runs the folder ``osp``)."""
+    from altfusion.cosim.ssp import read_ssp
+    from altfusion.interop.engines import ENGINES, run_altfusion, run_ecos, run_libcosim
+    from altfusion.interop.proxy import run_ecos_proxy
+
+    if engine not in ENGINES:
+        raise ValueError(f"unknown engine {engine!r}; known: {ENGINES}")
+    if engine in ("altfusion", "altfusion-jacobi"):
+        master = "jacobi" if engine.endswith("jacobi") else "ordered"
+        return run_altfusion(ssp, stop_time, master)
+    loaded = read_ssp(ssp)
+    system, fmu_paths = loaded.spec, loaded.fmu_paths
+    if engine == "libcosim":
+        return run_libcosim(ssp, system, fmu_paths, stop_time)
+    if engine == "libcosim-osp":
+        if osp is None:
+            raise ValueError("engine libcosim-osp needs the OSP folder")
+        return run_libcosim(osp, system, fmu_paths, stop_time)
+    if engine == "ecos":
+        return run_ecos(ssp, system, fmu_paths, stop_time)
+    return run_ecos_proxy(ssp, system, fmu_paths, stop_time)
+
 
 def main(argv: list[str] | None = None) -> int:
     from altfusion.cosim.instances import release_mapped_pythonfmu_state
-    from altfusion.interop.engines import ENGINES, run_engine
+    from altfusion.interop.engines import ENGINES
 
     atexit.register(release_mapped_pythonfmu_state)
     parser = argparse.ArgumentParser(prog="python -m altfusion.interop",

@@ -292,32 +292,10 @@ def ecos_divergent_components(system: SystemSpec) -> set[str]:
 
 
 # ---------------------------------------------------------------------------- dispatch
-def run_engine(engine: str, ssp: Path, stop_time: float | None = None,
-               osp: Path | None = None) -> Results:
-    """Run the system of ``ssp`` in ``engine`` (``libcosim-osp`` runs the folder ``osp``)."""
-    if engine not in ENGINES:
-        raise ValueError(f"unknown engine {engine!r}; known: {ENGINES}")
-    if engine in ("altfusion", "altfusion-jacobi"):
-        master = "jacobi" if engine.endswith("jacobi") else "ordered"
-        return run_altfusion(ssp, stop_time, master)
-    loaded = read_ssp(ssp)
-    system, fmu_paths = loaded.spec, loaded.fmu_paths
-    if engine == "libcosim":
-        return run_libcosim(ssp, system, fmu_paths, stop_time)
-    if engine == "libcosim-osp":
-        if osp is None:
-            raise ValueError("engine libcosim-osp needs the OSP folder")
-        return run_libcosim(osp, system, fmu_paths, stop_time)
-    if engine == "ecos":
-        return run_ecos(ssp, system, fmu_paths, stop_time)
-    from altfusion.interop.proxy import run_ecos_proxy
-
-    return run_ecos_proxy(ssp, system, fmu_paths, stop_time)
-
-
 def run_in_subprocess(engine: str, ssp: Path, stop_time: float | None = None,
                       osp: Path | None = None, timeout: float = 900.0) -> Results:
-    """:func:`run_engine` in a fresh Python process (engines may unload FMU libraries)."""
+    """``run_engine`` of :mod:`altfusion.interop.__main__` in a fresh Python process (engines may
+    unload FMU libraries)."""
     with tempfile.TemporaryDirectory(prefix="altfusion_engine_") as work:
         out = Path(work) / "results.csv"
         command = [sys.executable, "-m", "altfusion.interop", "run", "--engine", engine,

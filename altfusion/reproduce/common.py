@@ -28,6 +28,8 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
+from altfusion import atomic
+from altfusion.atomic import write_text
 from altfusion.cosim.results import Results
 from altfusion.cosim.runner import simulate
 from altfusion.cosim.ssp import read_ssp
@@ -273,7 +275,7 @@ def save_figure(fig, path: Path, dpi: int = 110) -> Path:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.tight_layout()
-    fig.savefig(path, dpi=dpi)
+    atomic.save_figure(fig, path, dpi=dpi)
     plt.close(fig)
     return path
 
@@ -306,7 +308,7 @@ def run_reproduction(options: ReproduceOptions, name: str, campaigns: tuple[Camp
         return 2
     text = tables(analysis)
     table = out / f"{name}.md"
-    table.write_text(text)
+    write_text(table, text)
     paths = figures(analysis, out)
     print(text)
     print("\n".join(f"wrote {path}" for path in [*paths, table]))

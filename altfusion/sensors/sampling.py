@@ -1,6 +1,6 @@
 """The sampling mechanism shared by every sensor: schedule, latency, counter, time stamp.
 
-The multi-rate convention of ``../shared/spec/signals.md`` (FMI 2.0 has no clocks):
+The multi-rate convention of ``docs/signals.md`` (FMI 2.0 has no clocks):
 
 * samples are taken at t = sample_offset + k·sample_period (k = 0, 1, ...) strictly after the
   start time, computed in integer ticks of the component's step, so over 3600 s from t = 0 a

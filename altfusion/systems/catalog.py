@@ -3,10 +3,10 @@
 from collections.abc import Callable
 
 from altfusion.cosim.system import Metric, SystemSpec
+from altfusion.replay.system import LOGS, catalog_replay
 from altfusion.systems.bao2017 import bao2017
 from altfusion.systems.hajiyev import hajiyev, hajiyev_drift
 from altfusion.systems.plant import plant_components, plant_connections
-from altfusion.systems.replay import LOGS, catalog_replay
 from altfusion.systems.sensors import SEED_003_SENSORS, sensor_components, sensor_connections
 from altfusion.systems.whang2008 import whang2008, whang2008_baseline
 from altfusion.systems.xu2016 import (

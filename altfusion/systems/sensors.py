@@ -4,7 +4,7 @@ Components are named after their role (``air_data``, ``gnss``, ``accelerometer``
 ``laser``); each gets its own seed, so changing one sensor's seed changes only that sensor.
 Every sensor is stepped at the base step unless ``steps`` says otherwise (its sample period
 must be a multiple of its step). Estimator systems add their estimator and connect it to the
-sensor outputs named in ``../shared/spec/signals.md``.
+sensor outputs named in ``docs/signals.md``.
 """
 
 from dataclasses import dataclass

@@ -1,7 +1,7 @@
 """Wiring an estimator to the sensor block of :mod:`.sensors` by contract names.
 
 An estimator's inputs carry the names of the sensor outputs they read
-(``../shared/spec/signals.md``): ``baro_*`` come from the ``air_data`` component, ``gps_*``
+(``docs/signals.md``): ``baro_*`` come from the ``air_data`` component, ``gps_*``
 from ``gnss``, ``acc_*`` from ``accelerometer``, ``radar_*`` from ``radar`` and ``laser_*``
 from ``laser``; inputs outside the sensor streams come from :data:`EXTRA_SOURCES`. The
 inputs are those the estimator's core class declares (the FMU declares the same;
