@@ -5,6 +5,7 @@ its FMUs); validate them; regenerate the generated documentation.
     python build_fmu.py            build what is missing or older than its sources
     python build_fmu.py --force    rebuild everything
     python build_fmu.py --check    exit 1 if a built FMU is missing or older than its sources
+    python build_fmu.py --plots    also rerun the FMU pages' reference plots (docs/fmus/*.png)
 
 Every FMU bundles the ``altfusion`` package. Each FMU is validated with fmpy's validator
 and each SSP against the SSP 1.0 schema; any problem fails the build.
@@ -19,6 +20,7 @@ FMU_SRC = HERE / "fmu_src"
 MODELS = HERE / "models"
 CORE = HERE / "altfusion"
 DOCS = HERE / "docs"
+FMU_TEXTS = FMU_SRC / "docs"
 
 
 def slave_scripts() -> list[Path]:
@@ -94,11 +96,23 @@ def write_if_changed(path: Path, text: str) -> None:
         print(f"wrote {path.relative_to(HERE)}")
 
 
-def build_docs(fmu_paths: dict[str, Path]) -> None:
-    from altfusion.docs import fmu_reference
+def build_docs(fmu_paths: dict[str, Path], plots: bool = False) -> None:
+    """The FMU reference, one page per FMU (its text in ``fmu_src/docs/``; its reference plot
+    rerun only with ``plots``: it simulates a catalog system per FMU) and the controller
+    design."""
+    from altfusion.docs import fmu_index, fmu_page, fmu_reference, read_fmu_text, reference_plot
     from altfusion.physics.controller_design import design, report
 
-    write_if_changed(DOCS / "fmu_reference.md", fmu_reference(sorted(fmu_paths.values())))
+    fmus = sorted(fmu_paths.values())
+    write_if_changed(DOCS / "fmu_reference.md", fmu_reference(fmus))
+    write_if_changed(DOCS / "fmus" / "README.md", fmu_index(fmus))
+    for fmu in fmus:
+        text = read_fmu_text(FMU_TEXTS / f"{fmu.stem}.md")
+        png = DOCS / "fmus" / f"{fmu.stem}.png"
+        if plots:
+            print(f"wrote {reference_plot(text.reference, fmu_paths, png).relative_to(HERE)}")
+        page = fmu_page(fmu, text, png.name if png.exists() else None)
+        write_if_changed(DOCS / "fmus" / f"{fmu.stem}.md", page)
     write_if_changed(DOCS / "controller_design.md", report(design()))
 
 
@@ -107,6 +121,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--check", action="store_true",
                         help="exit 1 if an FMU is missing or older than its sources")
     parser.add_argument("--force", action="store_true", help="rebuild every FMU")
+    parser.add_argument("--plots", action="store_true",
+                        help="rerun the reference plots of the FMU pages (about 35 s)")
     args = parser.parse_args(argv)
     scripts = slave_scripts()
     targets = {script: MODELS / f"{model_name(script)}.fmu" for script in scripts}
@@ -128,7 +144,7 @@ def main(argv: list[str] | None = None) -> int:
     fmu_paths = {fmu.stem: fmu for fmu in targets.values()}
     for path in build_systems(fmu_paths):
         print(f"wrote {path.relative_to(HERE)}")
-    build_docs(fmu_paths)
+    build_docs(fmu_paths, args.plots)
     print(f"{len(targets)} FMUs valid, systems written")
     return 0
 

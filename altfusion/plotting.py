@@ -8,6 +8,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from altfusion.atomic import save_figure  # noqa: E402
 from altfusion.cosim.results import Results  # noqa: E402
 
 MAX_PANELS = 6
@@ -32,6 +33,6 @@ def plot_results(results: Results, path: Path, title: str, subtitle: str = "") -
     fig.tight_layout()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     plt.close(fig)
     return path

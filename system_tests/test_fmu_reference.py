@@ -32,3 +32,20 @@ def test_every_parameter_input_and_output_has_its_unit_default_and_description(f
             assert var.description, f"{md.modelName}.{var.name} has no description"
             if var.causality != "output":
                 assert detail == (var.start or ""), f"{md.modelName}.{var.name} default"
+
+
+def test_every_fmu_has_a_current_page_with_its_text_and_reference_plot(fmus):
+    """docs/fmus/<Model>.md is what build_fmu.py generates from fmu_src/docs/<Model>.md (whose
+    reference run names a catalog system holding the component) and links its plot."""
+    from altfusion.docs import fmu_page, read_fmu_text
+    from altfusion.systems import build_system
+
+    root = REFERENCE.parent.parent
+    for name, path in fmus.items():
+        text = read_fmu_text(root / "fmu_src" / "docs" / f"{name}.md")
+        assert build_system(text.reference.system).component(text.reference.component).fmu \
+            == name
+        assert (REFERENCE.parent / "fmus" / f"{name}.png").is_file(), f"{name}: no plot"
+        page = REFERENCE.parent / "fmus" / f"{name}.md"
+        assert page.read_text() == fmu_page(path, text, f"{name}.png"), \
+            f"docs/fmus/{name}.md is stale: run python build_fmu.py and commit docs/"
