@@ -16,15 +16,17 @@ strings and lists are themselves; anything else is an object with a ``"$t"`` tag
 dicts (as key/value pairs), sets, deques (with their ``maxlen``), fractions, numpy arrays and
 scalars (dtype string, shape, base64 of the raw bytes; only numeric and boolean dtypes),
 numpy ``Generator`` s (the name of the bit generator, one of numpy's five, and its state
-dict), named tuples and plain objects of the core. Objects, lists, dicts, sets, deques,
-arrays and generators carry an ``id``; a second reference to the same one is ``{"$t": "ref"}``,
-so sharing (two sensors drawing from one generator) survives a round trip.
+dict), enum members of the core (by value), named tuples and plain objects of the core.
+Objects, lists, dicts, sets, deques, arrays and generators carry an ``id``; a second
+reference to the same one is ``{"$t": "ref"}``, so sharing (two sensors drawing from one
+generator) survives a round trip.
 
 Decoding calls no code chosen by the bytes: a class is found among the classes already
 imported from the core packages (``CORE_PACKAGES``) or the FMU's own slave script, never
-imported on demand; it must be a plain class, a dataclass or a named tuple, and is rebuilt
-with ``object.__new__`` (or ``tuple.__new__``) and its fields written directly, without
-``__init__``, ``__setstate__`` or any other method of it. Bit generators are constructed
+imported on demand; it must be a plain class, a dataclass, a named tuple or an enum (whose
+member is looked up by its int or str value). Objects are rebuilt with ``object.__new__``
+(or ``tuple.__new__``) and their fields written directly, without ``__init__``,
+``__setstate__`` or any other method of theirs. Bit generators are constructed
 from numpy's own classes and given their state through numpy's setter. Anything else is a
 :class:`StateError` naming the reason.
 """
@@ -32,6 +34,7 @@ from numpy's own classes and given their state through numpy's setter. Anything 
 import base64
 import collections
 import dataclasses
+import enum
 import fractions
 import json
 import struct
@@ -175,7 +178,7 @@ class _Encoder:
         shared = type(obj) in (list, dict, set, collections.deque, np.ndarray,
                                np.random.Generator) or _core_class(type(obj),
                                                                    self._own_module)
-        if shared and not _is_named_tuple(type(obj)):
+        if shared and not (_is_named_tuple(type(obj)) or isinstance(obj, enum.Enum)):
             known = self._first(obj)
             if known is not None:
                 return {"$t": "ref", "id": known}
@@ -209,6 +212,8 @@ class _Encoder:
                     "state": self.encode(bit_generator.state)}
         if _core_class(kind, self._own_module):
             name = f"{kind.__module__}:{kind.__qualname__}"
+            if isinstance(obj, enum.Enum) and type(obj.value) in (int, str):
+                return {"$t": "enum", "class": name, "v": obj.value}
             if _is_named_tuple(kind):
                 return {"$t": "namedtuple", "class": name, "v": [self.encode(v) for v in obj]}
             fields = {k: self.encode(v) for k, v in _object_fields(obj).items()}
@@ -237,7 +242,7 @@ def _allowed_class(name: Any, own_module: str) -> type:
     if not (isinstance(cls, type) and _core_class(cls, own_module) and cls.__module__ == module_name
             and cls.__qualname__ == qualname):
         raise StateError(f"class {name!r} is not a core class of this FMU")
-    if _is_named_tuple(cls):
+    if _is_named_tuple(cls) or issubclass(cls, enum.Enum):
         return cls
     if cls.__new__ is not object.__new__:
         raise StateError(f"class {name!r} has its own __new__")
@@ -298,6 +303,11 @@ class _Decoder:
             return self._register(tree, self._decode_array(tree))
         if tag == "generator":
             return self._register(tree, self._decode_generator(tree))
+        if tag == "enum":
+            cls = _allowed_class(tree["class"], self._own_module)
+            if not issubclass(cls, enum.Enum) or type(tree["v"]) not in (int, str):
+                raise StateError(f"corrupted state body (enum {tree['class']!r})")
+            return cls(tree["v"])
         if tag == "namedtuple":
             cls = _allowed_class(tree["class"], self._own_module)
             return tuple.__new__(cls, [self.decode(v) for v in tree["v"]])
