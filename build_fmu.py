@@ -7,8 +7,9 @@ its FMUs); validate them; regenerate the generated documentation.
     python build_fmu.py --check    exit 1 if a built FMU is missing or older than its sources
     python build_fmu.py --plots    also rerun the FMU pages' reference plots (docs/fmus/*.png)
 
-Every FMU bundles the ``altfusion`` package. Each FMU is validated with fmpy's validator
-and each SSP against the SSP 1.0 schema; any problem fails the build.
+Every FMU bundles a private copy of the ``altfusion`` modules its slave script needs, under a
+name of its own (``altfusion.fmi.bundle``: PythonFMU issue #228). Each FMU is validated with
+fmpy's validator and each SSP against the SSP 1.0 schema; any problem fails the build.
 """
 
 import argparse
@@ -21,6 +22,8 @@ MODELS = HERE / "models"
 CORE = HERE / "altfusion"
 DOCS = HERE / "docs"
 FMU_TEXTS = FMU_SRC / "docs"
+STAGE = HERE / "build" / "fmu_stage"
+"""The private core copy and the slave scripts renamed to import it, as bundled."""
 
 
 def slave_scripts() -> list[Path]:
@@ -57,11 +60,27 @@ def stale(script: Path, fmu: Path) -> bool:
     return not fmu.exists() or fmu.stat().st_mtime < sources_mtime(script)
 
 
-def build_fmu(script: Path, dest: Path = MODELS) -> Path:
+def stage_core() -> Path:
+    """The private copy of the core every FMU bundles (``altfusion.fmi.bundle``)."""
+    from altfusion.fmi.bundle import stage_core as stage
+    from altfusion.version import CORE_VERSION
+
+    return stage(CORE, slave_scripts(), CORE_VERSION, STAGE)
+
+
+def build_fmu(script: Path, dest: Path = MODELS, core: Path | None = None) -> Path:
+    """Build the FMU of ``script`` carrying the private ``core`` copy (default: staged now by
+    :func:`stage_core`)."""
     from pythonfmu.builder import FmuBuilder
 
+    from altfusion.fmi.bundle import stage_script
+
+    core = core or stage_core()
+    staged = stage_script(script, core, STAGE)
+    if str(STAGE) not in sys.path:
+        sys.path.insert(0, str(STAGE))
     return FmuBuilder.build_FMU(
-        script, dest=dest, project_files=[CORE, *bundled_files(script)],
+        staged, dest=dest, project_files=[core, *bundled_files(script)],
         canGetAndSetFMUstate=True, canSerializeFMUstate=True,
         canHandleVariableCommunicationStepSize=False,
     )
@@ -133,10 +152,12 @@ def main(argv: list[str] | None = None) -> int:
         return 1 if outdated else 0
     MODELS.mkdir(exist_ok=True)
     problems = []
+    core = None
     for script, fmu in targets.items():
         if args.force or stale(script, fmu):
             print(f"building models/{fmu.name}")
-            build_fmu(script)
+            core = core or stage_core()
+            build_fmu(script, core=core)
         problems += [f"{fmu.name}: {p}" for p in validate_fmu(fmu)]
     if problems:
         print("\n".join(problems), file=sys.stderr)

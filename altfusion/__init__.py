@@ -13,6 +13,12 @@ The import contracts in ``pyproject.toml`` (checked by ``tests/test_architecture
 this.
 """
 
-from altfusion.version import CORE_VERSION, __version__
+from importlib import import_module
+
+from altfusion.version import BUNDLE, CORE_VERSION, __version__
 
 __all__ = ["CORE_VERSION", "__version__"]
+
+if BUNDLE:  # a private copy inside an FMU: load all of it while its folder exists
+    for _module in BUNDLE["modules"]:
+        import_module(f"{__name__}.{_module}")

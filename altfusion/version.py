@@ -1,11 +1,14 @@
 """Package version and the core version recorded in every FMU.
 
 ``CORE_VERSION`` is the package version plus a digest of the core's Python sources. An FMU
-records the core version it was built from; since pythonfmu imports only the first bundled copy
-of ``altfusion`` in a process, the runner refuses to mix FMUs built from different cores.
+records the core version it was built from and carries a private copy of the core named after
+it (:mod:`altfusion.fmi.bundle`), whose ``bundle.json`` (:data:`BUNDLE`) states that version
+and the modules copied; the runner's in-process core backend steps its own copy, so it refuses
+FMUs built from another core.
 """
 
 import hashlib
+import json
 from pathlib import Path
 
 __version__ = "0.1.0"
@@ -23,4 +26,9 @@ def source_digest(package_dir: Path | None = None) -> str:
     return digest.hexdigest()[:12]
 
 
-CORE_VERSION = f"{__version__}+{source_digest()}"
+BUNDLE_MANIFEST = "bundle.json"
+_MANIFEST_PATH = Path(__file__).with_name(BUNDLE_MANIFEST)
+BUNDLE: dict | None = json.loads(_MANIFEST_PATH.read_text()) if _MANIFEST_PATH.exists() else None
+"""A private copy's manifest: its ``core_version`` and ``modules``; None when installed."""
+
+CORE_VERSION = BUNDLE["core_version"] if BUNDLE else f"{__version__}+{source_digest()}"

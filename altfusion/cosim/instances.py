@@ -127,12 +127,13 @@ def fmu_info(path: Path) -> FmuInfo:
 
 
 def check_core_version(info: FmuInfo) -> None:
-    """Refuse an FMU built from another core: pythonfmu would run this process's copy."""
+    """Refuse to step an FMU's core in-process (:class:`CoreInstance`) when it was built from
+    another core: this process's copy would run instead of the FMU's own."""
     if info.core_version != CORE_VERSION:
         raise CosimError(
             f"{info.path.name} was built from altfusion core {info.core_version}, but this "
-            f"process runs core {CORE_VERSION}; pythonfmu loads only one copy of the core per "
-            f"process, so the FMU would not run its own code. Rebuild: python build_fmu.py"
+            f"process runs core {CORE_VERSION}; stepping its core in-process would not run the "
+            f"FMU's own code. Rebuild (python build_fmu.py) or run it through FMI"
         )
 
 
@@ -238,7 +239,6 @@ class FmuInstance:
     """One FMU instance driven through fmpy's FMU2Slave, with its log messages collected."""
 
     def __init__(self, name: str, info: FmuInfo):
-        check_core_version(info)
         self.name, self.info = name, info
         folder = _extracted_folder(info.path)
         router = _router()
@@ -386,6 +386,7 @@ class CoreInstance:
     def __init__(self, name: str, info: FmuInfo):
         if info.core_class is None:
             raise CosimError(f"{info.path.name} names no altfusion core class")
+        check_core_version(info)
         module, qualname = info.core_class.split(":")
         self.core_class = getattr(importlib.import_module(module), qualname)
         self.name, self.info = name, info

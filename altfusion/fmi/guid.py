@@ -13,16 +13,14 @@ import json
 import uuid
 from collections.abc import Iterable
 from pathlib import Path
-from types import ModuleType
 from typing import Any
 
 GUID_NAMESPACE = uuid.uuid5(uuid.NAMESPACE_URL, "https://altfusion/fmu-interface")
 
 
-def _source_digest(module: ModuleType | None) -> str:
+def _source_digest(script: Path | None) -> str:
     """SHA-256 of the slave script's file ('' for a class defined without one)."""
-    path = getattr(module, "__file__", None)
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest() if path else ""
+    return hashlib.sha256(script.read_bytes()).hexdigest() if script else ""
 
 
 def _variable_row(var: Any, units: dict[str, tuple[str | None, Any, Any]]) -> list[Any]:
@@ -34,13 +32,13 @@ def _variable_row(var: Any, units: dict[str, tuple[str | None, Any, Any]]) -> li
 
 def interface_guid(model_name: str, variables: Iterable[Any],
                    units: dict[str, tuple[str | None, Any, Any]],
-                   slave_module: ModuleType | None, core_version: str) -> str:
+                   slave_script: Path | None, core_version: str) -> str:
     """The GUID of the FMU ``model_name`` with these pythonfmu ``variables`` (their declared
-    ``units`` and bounds by name), declared by ``slave_module``, on ``core_version``."""
+    ``units`` and bounds by name), declared by ``slave_script``, on ``core_version``."""
     interface = {
         "model": model_name,
         "variables": [_variable_row(v, units) for v in variables],
-        "slave_script_sha256": _source_digest(slave_module),
+        "slave_script_sha256": _source_digest(slave_script),
         "core_version": core_version,
     }
     canonical = json.dumps(interface, sort_keys=True, separators=(",", ":"))

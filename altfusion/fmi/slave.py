@@ -44,6 +44,7 @@ import sys
 import traceback
 from dataclasses import replace
 from operator import attrgetter
+from pathlib import Path
 from typing import Any, ClassVar
 from xml.etree.ElementTree import Element, SubElement
 
@@ -53,6 +54,7 @@ from pythonfmu.enums import Fmi2Status
 
 from altfusion.component import DEFAULT_STEP_SIZE, Component
 from altfusion.fmi import state as fmu_state
+from altfusion.fmi.bundle import public_module
 from altfusion.fmi.guid import interface_guid
 from altfusion.fmi.reexec import ReusedSlaveClass, drop_repeated_path_entry
 from altfusion.fmi.variables import Input, Output
@@ -142,8 +144,17 @@ class CoreSlave(Fmi2Slave, metaclass=ReusedSlaveClass):
         if "_guid" not in cls.__dict__:
             units = self._declared_units_and_bounds()
             cls._guid = interface_guid(self.modelName, self.vars.values(), units,
-                                       sys.modules.get(cls.__module__), CORE_VERSION)
+                                       self._slave_script(), CORE_VERSION)
         return cls._guid
+
+    def _slave_script(self) -> Path | None:
+        """The file of the slave script: in an FMU, the copy in this instance's resources (the
+        module pythonfmu imported may come from another, since deleted, extraction folder)."""
+        name = f"{type(self).__module__.rpartition('.')[2]}.py"
+        if self.resources and Path(self.resources, name).is_file():
+            return Path(self.resources, name)
+        path = getattr(sys.modules.get(type(self).__module__), "__file__", None)
+        return Path(path) if path else None
 
     # ----------------------------------------------------------------- declarations
     @classmethod
@@ -430,7 +441,7 @@ class CoreSlave(Fmi2Slave, metaclass=ReusedSlaveClass):
         tool = SubElement(vendor, "Tool", {"name": VENDOR_TOOL})
         core = self.core_class
         SubElement(tool, "Core", {"version": CORE_VERSION,
-                                  "class": f"{core.__module__}:{core.__qualname__}"})
+                                  "class": f"{public_module(core.__module__)}:{core.__qualname__}"})
         model_variables = root.find("ModelVariables")
         root.insert(list(root).index(model_variables), vendor)
         index_of: dict[str, int] = {}
