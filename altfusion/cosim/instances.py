@@ -13,7 +13,6 @@ import itertools
 import os
 import zipfile
 from collections.abc import Sequence
-from ctypes import byref
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -32,7 +31,6 @@ from fmpy.fmi2 import (
     fmi2Real,
     fmi2ValueReference,
 )
-from fmpy.logging import addLoggerProxy
 
 from altfusion.params import coerce
 from altfusion.version import CORE_VERSION
@@ -140,8 +138,11 @@ def check_core_version(info: FmuInfo) -> None:
 class _LogRouter:
     """One FMI logger for the whole process, routing messages by instance name.
 
-    fmpy's logger proxy (which formats the variadic message) keeps a single Python callback
-    per process, so per-instance callbacks would receive each other's messages.
+    Our FMUs' native shim (``altfusion.fmi.shim``) hands the logger messages it formatted
+    itself, ``%`` escaped as ``%%``, so the router takes the message as it is and needs no
+    formatting proxy. (fmpy's proxy keeps a single Python callback per process: any later
+    ``simulate_fmu(..., logger=...)`` would take it over and, once its callback is freed, crash
+    the next message of ours.)
     """
 
     def __init__(self):
@@ -150,7 +151,6 @@ class _LogRouter:
         self.callbacks.logger = fmi2CallbackLoggerTYPE(self._on_log)
         self.callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
         self.callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-        addLoggerProxy(byref(self.callbacks))
         self._serial = itertools.count()
 
     def register(self, name: str) -> tuple[str, list[tuple[int, str]]]:
@@ -162,7 +162,8 @@ class _LogRouter:
     def _on_log(self, _env, instance, status, _category, message) -> None:
         queue = self.queues.get(instance.decode("utf-8", "replace"))
         if queue is not None:
-            queue.append((int(status), message.decode("utf-8", "replace")))
+            text = message.decode("utf-8", "replace").replace("%%", "%")
+            queue.append((int(status), text))
 
 
 _ROUTER: _LogRouter | None = None
