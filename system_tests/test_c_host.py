@@ -10,6 +10,7 @@ import math
 import os
 import re
 import shutil
+import site
 import subprocess
 import sys
 import sysconfig
@@ -39,7 +40,8 @@ VARIABLES = {
 
 
 def libpython() -> Path:
-    """The interpreter's shared library, as README's recipe names it."""
+    """The interpreter's shared library, as README's recipe names it (with PYTHONHOME and
+    PYTHONPATH as there: this interpreter's installation and its site-packages, for numpy)."""
     return Path(sysconfig.get_config_var("LIBDIR")) / sysconfig.get_config_var("LDLIBRARY")
 
 
@@ -66,7 +68,7 @@ def host(fmus, tmp_path_factory) -> dict:
     subprocess.run([compiler, "-O1", "-o", str(binary), str(SOURCE), *defines, "-ldl", "-lm"],
                    check=True, capture_output=True, text=True)
     environment = {**os.environ, "LD_PRELOAD": str(libpython()), "PYTHONHOME": sys.base_prefix,
-                   "PYTHONPATH": os.pathsep.join(p for p in sys.path if "site-packages" in p)}
+                   "PYTHONPATH": os.pathsep.join(site.getsitepackages())}
     return {"binary": binary, "folders": folders, "guids": guids, "env": environment}
 
 

@@ -92,3 +92,35 @@ def test_a_later_step_other_than_the_adopted_one_is_refused(fmus):
             instance.do_step(0.1, 0.1)
     finally:
         instance.free()
+
+
+def test_our_instances_keep_their_logger_when_the_user_runs_simulate_fmu_in_between(fmus):
+    """fmpy's native logger proxy holds one Python callback per process and every
+    ``simulate_fmu(logger=...)`` replaces it, then frees its own: the runner logs through a
+    private copy of the proxy, so an error of an instance created before the user's
+    ``simulate_fmu`` still reaches the runner (before: a segfault). In a subprocess, so that a
+    crash fails this test only."""
+    script = (
+        "import gc, sys\n"
+        "from fmpy import simulate_fmu\n"
+        "from altfusion.cosim.instances import CosimError, FmuInstance, fmu_info\n"
+        "gnss, baseline = sys.argv[1:3]\n"
+        "instance = FmuInstance('gnss', fmu_info(gnss))\n"
+        "instance.initialize({'sample_period': 0.1}, 0.0, 0.0, 1.0)\n"
+        "instance.exit_initialization()\n"
+        "instance.do_step(0.0, 0.05)\n"
+        "simulate_fmu(baseline, stop_time=0.1, output_interval=0.01, debug_logging=True,\n"
+        "             logger=lambda *args: None)\n"
+        "gc.collect()\n"
+        "try:\n"
+        "    instance.do_step(0.05, 0.1)\n"
+        "except CosimError as error:\n"
+        "    print(error)\n"
+        "instance.free()\n"
+    )
+    completed = subprocess.run([sys.executable, "-c", script, str(fmus["GnssReceiver"]),
+                                str(fmus["BaselineKF"])], capture_output=True, text=True,
+                               timeout=120)
+    assert completed.returncode == 0, completed.stderr[-2000:]
+    assert "communication step 0.1 s differs from parameter step_size = 0.05 s" in \
+        completed.stdout, completed.stdout

@@ -11,13 +11,17 @@ import ctypes
 import importlib
 import itertools
 import os
+import shutil
+import tempfile
 import zipfile
 from collections.abc import Sequence
+from ctypes import byref
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 from xml.etree import ElementTree as ET
 
+import fmpy
 from fmpy import calloc, extract, free, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import (
@@ -135,14 +139,36 @@ def check_core_version(info: FmuInfo) -> None:
         )
 
 
+def _private_logger_proxy():
+    """``addLoggerProxy`` of a private copy of fmpy's native logging library.
+
+    fmpy's logger proxy (the C function that formats the variadic message before calling
+    Python) keeps ONE Python callback per loaded library, and every ``fmpy.simulate_fmu`` or
+    ``FMU2Slave`` with a logger replaces it, then lets its callback be freed: an instance of
+    ours created earlier would log through a dangling pointer (a segfault when a user calls
+    ``simulate_fmu`` between two runs of ours). A copy of the library loaded from a file of
+    its own has its own static callback, which nobody else replaces (the file is removed once
+    mapped, where the system allows it).
+    """
+    from fmpy import logging as fmpy_logging
+
+    name = "logging" + fmpy.sharedLibraryExtension
+    source = Path(fmpy_logging.library_dir) / fmpy.platform / name
+    folder = tempfile.mkdtemp(prefix="altfusion-logger-")
+    copy = Path(folder) / name
+    shutil.copyfile(source, copy)
+    library = ctypes.CDLL(str(copy))
+    shutil.rmtree(folder, ignore_errors=True)
+    add = library.addLoggerProxy
+    add.argtypes, add.restype = [ctypes.c_void_p], None
+    return add
+
+
 class _LogRouter:
     """One FMI logger for the whole process, routing messages by instance name.
 
-    Our FMUs' native shim (``altfusion.fmi.shim``) hands the logger messages it formatted
-    itself, ``%`` escaped as ``%%``, so the router takes the message as it is and needs no
-    formatting proxy. (fmpy's proxy keeps a single Python callback per process: any later
-    ``simulate_fmu(..., logger=...)`` would take it over and, once its callback is freed, crash
-    the next message of ours.)
+    Our logger proxy (:func:`_private_logger_proxy`) keeps a single Python callback, so
+    per-instance callbacks would receive each other's messages.
     """
 
     def __init__(self):
@@ -151,6 +177,7 @@ class _LogRouter:
         self.callbacks.logger = fmi2CallbackLoggerTYPE(self._on_log)
         self.callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
         self.callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        _private_logger_proxy()(byref(self.callbacks))
         self._serial = itertools.count()
 
     def register(self, name: str) -> tuple[str, list[tuple[int, str]]]:
@@ -162,8 +189,7 @@ class _LogRouter:
     def _on_log(self, _env, instance, status, _category, message) -> None:
         queue = self.queues.get(instance.decode("utf-8", "replace"))
         if queue is not None:
-            text = message.decode("utf-8", "replace").replace("%%", "%")
-            queue.append((int(status), text))
+            queue.append((int(status), message.decode("utf-8", "replace")))
 
 
 _ROUTER: _LogRouter | None = None

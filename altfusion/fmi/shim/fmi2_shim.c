@@ -6,12 +6,15 @@
  *
  *  - Resource URIs: file:/p, file:///p, file://localhost/p (and percent-escapes) are all
  *    handed to pythonfmu as file:///p, the only form it reads.
- *  - Clean exit: pythonfmu releases its static Python state twice at exit (C++ static
- *    destructor, then its unload hook) unless finalizePythonInterpreter ran first. The shim
- *    loads pythonfmu with RTLD_NODELETE (unloading and reloading it crashes), pins itself
- *    the same way and, once pythonfmu is loaded, registers an exit handler that calls the
- *    finalizer: exit handlers run in reverse order of registration, so it runs before
- *    pythonfmu's static destructors. Calling the finalizer again is harmless.
+ *  - Clean exit and unload: pythonfmu releases its static Python state twice when it is
+ *    unloaded or the process exits (C++ static destructor, then its unload hook) unless
+ *    finalizePythonInterpreter ran first. Once pythonfmu is loaded, the shim registers a
+ *    handler that calls the finalizer: handlers run in reverse order of registration, at exit
+ *    or when the host unloads the shim, so it runs before pythonfmu's static destructors.
+ *    In a C host pythonfmu starts the interpreter, which cannot be started twice (numpy): the
+ *    shim then loads pythonfmu with RTLD_NODELETE and pins itself the same way, so both stay
+ *    until exit. In a Python host both unload with the host's dlclose (each unload and reload
+ *    would otherwise keep ~0.4 MB). Calling the finalizer again is harmless.
  *  - Failures reach the host: pythonfmu is instantiated with logging on; messages of status
  *    fmi2Warning or worse reach the host's logger whatever loggingOn says, the others when the
  *    host asked for them (loggingOn, fmi2SetDebugLogging and its categories). Every call
@@ -22,6 +25,7 @@
  *  - Instances are reused: fmi2FreeInstance resets a healthy instance (fmi2Reset) and keeps
  *    up to POOL_SIZE of them; fmi2Instantiate of the same GUID and resources hands one back.
  *    pythonfmu re-executes the slave script at each fmi2Instantiate and keeps ~1 kB per call.
+ *    Pooled instances are freed when the shim is unloaded (or at exit, if Python still runs).
  *
  * Built by build_fmu.py with the system compiler: cc -shared -fPIC (no Python headers; the
  * few Python C-API functions used are looked up in the process at run time).
@@ -254,8 +258,32 @@ static void shim_logger(fmi2ComponentEnvironment env, fmi2String instance_name,
 }
 
 /* ---------------------------------------------------------------- loading pythonfmu */
-static void release_python_state_at_exit(void) {
+static void* library;                    /* pythonfmu's */
+static int owns_interpreter;             /* pythonfmu started the interpreter (a C host) */
+
+static int python_alive(void) {
+    int (*is_initialized)(void) = (int (*)(void))dlsym(RTLD_DEFAULT, "Py_IsInitialized");
+    return is_initialized && is_initialized();
+}
+
+/* Run at exit, or when the host unloads this library (a handler registered by a shared
+ * library also runs at its dlclose): release pythonfmu's state before its static destructors
+ * and unload hook do (twice); pooled instances are freed while their Python is alive. */
+static void release_pythonfmu(void) {
+    int alive = python_alive();
+    pthread_mutex_lock(&lock);
+    for (size_t i = 0; i < pooled; i++) {
+        if (alive) pythonfmu.fmi2FreeInstance(pool[i]->inner);
+        destroy(pool[i]);
+    }
+    pooled = 0;
+    pthread_mutex_unlock(&lock);
     if (pythonfmu.finalize) pythonfmu.finalize();
+    if (!owns_interpreter && alive) {   /* unloaded by a Python host: unload pythonfmu too */
+        dlclose(library);
+        library = NULL;
+        load_state = 0;
+    }
 }
 
 static int load_pythonfmu(void) {
@@ -274,7 +302,10 @@ static int load_pythonfmu(void) {
     const char* slash = strrchr(self.dli_fname, '/');
     int folder = slash ? (int)(slash - self.dli_fname) + 1 : 0;
     snprintf(path, sizeof path, "%.*s%s", folder, self.dli_fname, PYTHONFMU_LIBRARY);
-    void* library = dlopen(path, RTLD_NOW | RTLD_LOCAL | RTLD_NODELETE);
+    /* In a host without a running Python, pythonfmu starts the interpreter and must never be
+     * unloaded (finalized, numpy cannot be imported again): it and this library stay. */
+    owns_interpreter = !python_alive();
+    library = dlopen(path, RTLD_NOW | RTLD_LOCAL | (owns_interpreter ? RTLD_NODELETE : 0));
     if (!library) {
         snprintf(load_error, sizeof load_error, "cannot load pythonfmu's library: %s",
                  dlerror());
@@ -288,9 +319,8 @@ static int load_pythonfmu(void) {
     FORWARDED(RESOLVE)
 #undef RESOLVE
     pythonfmu.finalize = (void (*)(void))dlsym(library, "finalizePythonInterpreter");
-    /* Never unloaded either: the exit handler below lives in this library. */
-    dlopen(self.dli_fname, RTLD_NOW | RTLD_NOLOAD | RTLD_NODELETE);
-    atexit(release_python_state_at_exit);
+    if (owns_interpreter) dlopen(self.dli_fname, RTLD_NOW | RTLD_NOLOAD | RTLD_NODELETE);
+    atexit(release_pythonfmu);   /* after pythonfmu's static constructors: runs before */
     load_state = 1;
 done:
     pthread_mutex_unlock(&lock);
