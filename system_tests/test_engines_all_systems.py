@@ -1,6 +1,6 @@
 """Every ``models/*.ssp`` loaded and run one after another in a single libcosim process and in
-a single ECOS process (issue 14): each FMU's private core copy and the native shim (which
-never lets an engine unload pythonfmu's library) make a process survive any sequence of our
+a single ECOS process (issue 14): each FMU's private core copy, and the native shim releasing
+pythonfmu's state before an engine unloads an FMU, make a process survive any sequence of our
 systems. Short runs (``STOP`` s each), one subprocess per engine.
 
 Each run must complete with finite outputs. The one exception is libcosim's documented
