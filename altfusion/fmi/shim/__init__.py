@@ -28,8 +28,9 @@ class ShimBuildError(RuntimeError):
 
 def compile_shim(folder: Path) -> Path:
     """Compile the shim into ``folder`` with the system C compiler (``$CC``, default ``cc``);
-    the shared library's path. No Python headers are needed: the shim looks up the few
-    Python C-API functions it uses in the host process at run time."""
+    the shared library's path. No Python headers are needed: the few Python C-API functions
+    the shim calls are declared in it and resolved from the host process when it is loaded
+    (``-z now``: without a Python in the process, loading fails naming the symbol)."""
     compiler = os.environ.get("CC", "cc")
     if shutil.which(compiler) is None:
         raise ShimBuildError(
@@ -39,6 +40,7 @@ def compile_shim(folder: Path) -> Path:
     folder.mkdir(parents=True, exist_ok=True)
     library = folder / "fmi2_shim.so"
     command = [compiler, "-shared", "-fPIC", "-O2", "-Wall", "-Wextra", "-fvisibility=hidden",
+               "-Wl,-z,now",
                f'-DPYTHONFMU_LIBRARY="{PYTHONFMU_LIBRARY}"', "-o", str(library), str(SOURCE),
                "-ldl", "-lpthread"]
     done = subprocess.run(command, capture_output=True, text=True, check=False)

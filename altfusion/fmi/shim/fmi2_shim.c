@@ -27,8 +27,9 @@
  *    pythonfmu re-executes the slave script at each fmi2Instantiate and keeps ~1 kB per call.
  *    Pooled instances are freed when the shim is unloaded (or at exit, if Python still runs).
  *
- * Built by build_fmu.py with the system compiler: cc -shared -fPIC (no Python headers; the
- * few Python C-API functions used are looked up in the process at run time).
+ * Built by build_fmu.py with the system compiler: cc -shared -fPIC -Wl,-z,now (no Python
+ * headers: the few Python C-API functions used are declared below and, like pythonfmu's,
+ * resolved from the Python already in the process).
  */
 #define _GNU_SOURCE
 #include <ctype.h>
@@ -46,6 +47,7 @@ __asm__(".symver dlopen,dlopen@GLIBC_2.2.5");
 __asm__(".symver dlsym,dlsym@GLIBC_2.2.5");
 __asm__(".symver dladdr,dladdr@GLIBC_2.2.5");
 __asm__(".symver dlerror,dlerror@GLIBC_2.2.5");
+__asm__(".symver dlclose,dlclose@GLIBC_2.2.5");
 #endif
 
 #ifndef PYTHONFMU_LIBRARY
@@ -136,6 +138,20 @@ EXPORT fmi2Status fmi2GetIntegerStatus(fmi2Component, const fmi2StatusKind, fmi2
 EXPORT fmi2Status fmi2GetBooleanStatus(fmi2Component, const fmi2StatusKind, fmi2Boolean*);
 EXPORT fmi2Status fmi2GetStringStatus(fmi2Component, const fmi2StatusKind, fmi2String*);
 EXPORT void finalizePythonInterpreter(void);
+
+/* ---------------------------------------------------------------- Python C-API (stable ABI)
+ * Resolved from the host process, as pythonfmu's library resolves its own (no headers). The
+ * shim is linked with -z now: in a process without Python it does not load at all, the
+ * loader naming the missing symbol, as pythonfmu's library does. */
+typedef struct PyObject PyObject;
+typedef int PyGILState_STATE;
+extern int Py_IsInitialized(void);
+extern PyGILState_STATE PyGILState_Ensure(void);
+extern void PyGILState_Release(PyGILState_STATE);
+extern PyObject* PyObject_GetAttrString(PyObject*, const char*);
+extern const char* PyUnicode_AsUTF8(PyObject*);
+extern void Py_DecRef(PyObject*);
+extern void PyErr_Clear(void);
 
 #define FORWARDED(X) \
     X(fmi2Instantiate) X(fmi2FreeInstance) X(fmi2SetupExperiment) \
@@ -262,8 +278,7 @@ static void* library;                    /* pythonfmu's */
 static int owns_interpreter;             /* pythonfmu started the interpreter (a C host) */
 
 static int python_alive(void) {
-    int (*is_initialized)(void) = (int (*)(void))dlsym(RTLD_DEFAULT, "Py_IsInitialized");
-    return is_initialized && is_initialized();
+    return Py_IsInitialized();
 }
 
 /* Run at exit, or when the host unloads this library (a handler registered by a shared
@@ -566,30 +581,17 @@ FORWARD(fmi2GetBooleanStatus, (const fmi2StatusKind k, fmi2Boolean* x), (k, x))
 FORWARD(fmi2GetStringStatus, (const fmi2StatusKind k, fmi2String* x), (k, x))
 
 /* ---------------------------------------------------------------- refused states */
-typedef struct PyObject PyObject;
-typedef int PyGILState;
-
 /* The reason a deserialized state was refused (its Python object's `reason`, a str; see
- * altfusion.fmi.state.RefusedState), copied into `reason`; 0 if the state was accepted or
- * the Python C-API cannot be found in the process. */
+ * altfusion.fmi.state.RefusedState), copied into `reason`; 0 if the state was accepted. */
 static int refusal(fmi2FMUstate state, char* reason, size_t size) {
-    PyGILState (*ensure)(void) = (PyGILState (*)(void))dlsym(RTLD_DEFAULT, "PyGILState_Ensure");
-    void (*release)(PyGILState) = (void (*)(PyGILState))dlsym(RTLD_DEFAULT, "PyGILState_Release");
-    PyObject* (*get_attribute)(PyObject*, const char*) =
-        (PyObject* (*)(PyObject*, const char*))dlsym(RTLD_DEFAULT, "PyObject_GetAttrString");
-    const char* (*utf8)(PyObject*) = (const char* (*)(PyObject*))dlsym(RTLD_DEFAULT,
-                                                                        "PyUnicode_AsUTF8");
-    void (*decref)(PyObject*) = (void (*)(PyObject*))dlsym(RTLD_DEFAULT, "Py_DecRef");
-    void (*clear_error)(void) = (void (*)(void))dlsym(RTLD_DEFAULT, "PyErr_Clear");
-    if (!state || !ensure || !release || !get_attribute || !utf8 || !decref || !clear_error)
-        return 0;
-    PyGILState gil = ensure();
-    PyObject* value = get_attribute((PyObject*)state, "reason");
-    const char* text = value ? utf8(value) : NULL;
+    if (!state) return 0;
+    PyGILState_STATE gil = PyGILState_Ensure();
+    PyObject* value = PyObject_GetAttrString((PyObject*)state, "reason");
+    const char* text = value ? PyUnicode_AsUTF8(value) : NULL;
     if (text) snprintf(reason, size, "%s", text);
-    clear_error();
-    if (value) decref(value);
-    release(gil);
+    PyErr_Clear();
+    if (value) Py_DecRef(value);
+    PyGILState_Release(gil);
     return text != NULL;
 }
 
