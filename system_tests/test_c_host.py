@@ -141,11 +141,21 @@ def test_a_bad_parameter_fails_initialization_with_the_reason_while_logging_is_o
     assert errors and "parameter 'R_baro' = -1.0" in errors[0], done.stdout
 
 
-def test_a_resource_location_that_is_no_local_file_uri_is_refused_naming_it(host):
+BAD_LOCATIONS = {
+    "another host": (lambda path: f"file://otherhost{path}", "names no local folder (expected "
+                     "file:/path, file:///path or file://localhost/path)"),
+    "relative": (lambda path: "file:fmus%20dir/resources", "is not an absolute file URI "
+                 "(expected file:/path, file:///path or file://localhost/path)"),
+    "bad escape": (lambda path: f"file://{path}%2", "has an invalid percent-escape"),
+}
+
+
+@pytest.mark.parametrize("kind", BAD_LOCATIONS)
+def test_a_resource_location_that_is_no_local_file_uri_is_refused_naming_it(host, kind):
     folder = host["folders"]["YangFusionKF"]
-    location = f"file://otherhost{quote(str(folder / 'resources'))}"
+    make, reason = BAD_LOCATIONS[kind]
+    location = make(quote(str(folder / "resources")))
     done = run(host, "badparam", str(folder), host["guids"]["YangFusionKF"], location)
     assert "instantiate kf failed" in done.stdout
     assert errors_logged(done.stdout) == [
-        f"fmi2Instantiate: resource location '{location}' names no local folder (expected "
-        "file:/path, file:///path or file://localhost/path)"]
+        f"fmi2Instantiate: resource location '{location}' {reason}"]
