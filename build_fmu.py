@@ -8,8 +8,10 @@ its FMUs); validate them; regenerate the generated documentation.
     python build_fmu.py --plots    also rerun the FMU pages' reference plots (docs/fmus/*.png)
 
 Every FMU bundles a private copy of the ``altfusion`` modules its slave script needs, under a
-name of its own (``altfusion.fmi.bundle``: PythonFMU issue #228). Each FMU is validated with
-fmpy's validator and each SSP against the SSP 1.0 schema; any problem fails the build.
+name of its own (``altfusion.fmi.bundle``: PythonFMU issue #228), and its linux64 binary is
+our native shim in front of pythonfmu's library (``altfusion.fmi.shim``, compiled with the
+system C compiler ``cc``: the build fails with that reason without one). Each FMU is validated
+with fmpy's validator and each SSP against the SSP 1.0 schema; any problem fails the build.
 """
 
 import argparse
@@ -24,6 +26,8 @@ DOCS = HERE / "docs"
 FMU_TEXTS = FMU_SRC / "docs"
 STAGE = HERE / "build" / "fmu_stage"
 """The private core copy and the slave scripts renamed to import it, as bundled."""
+SHIM_BUILD = HERE / "build" / "shim"
+"""The compiled native shim (``altfusion.fmi.shim``)."""
 
 
 def slave_scripts() -> list[Path]:
@@ -53,7 +57,10 @@ def bundled_files(script: Path) -> list[Path]:
 def sources_mtime(script: Path) -> float:
     core = [p for p in CORE.rglob("*.py") if "__pycache__" not in p.parts]
     bundled = [f for p in bundled_files(script) for f in ([p] if p.is_file() else p.rglob("*"))]
-    return max(p.stat().st_mtime for p in [script, Path(__file__), *core, *bundled])
+    from altfusion.fmi.shim import SOURCE as SHIM_SOURCE
+
+    inputs = [script, Path(__file__), SHIM_SOURCE, *core, *bundled]
+    return max(p.stat().st_mtime for p in inputs)
 
 
 def stale(script: Path, fmu: Path) -> bool:
@@ -68,22 +75,27 @@ def stage_core() -> Path:
     return stage(CORE, slave_scripts(), CORE_VERSION, STAGE)
 
 
-def build_fmu(script: Path, dest: Path = MODELS, core: Path | None = None) -> Path:
+def build_fmu(script: Path, dest: Path = MODELS, core: Path | None = None,
+              shim: Path | None = None) -> Path:
     """Build the FMU of ``script`` carrying the private ``core`` copy (default: staged now by
-    :func:`stage_core`)."""
+    :func:`stage_core`), its linux64 binary the native ``shim`` (default: compiled now)."""
     from pythonfmu.builder import FmuBuilder
 
     from altfusion.fmi.bundle import stage_script
+    from altfusion.fmi.shim import compile_shim, install_shim
 
     core = core or stage_core()
+    shim = shim or compile_shim(SHIM_BUILD)
     staged = stage_script(script, core, STAGE)
     if str(STAGE) not in sys.path:
         sys.path.insert(0, str(STAGE))
-    return FmuBuilder.build_FMU(
+    fmu = Path(FmuBuilder.build_FMU(
         staged, dest=dest, project_files=[core, *bundled_files(script)],
         canGetAndSetFMUstate=True, canSerializeFMUstate=True,
         canHandleVariableCommunicationStepSize=False,
-    )
+    ))
+    install_shim(fmu, shim)
+    return fmu
 
 
 def validate_fmu(fmu: Path) -> list[str]:
@@ -143,6 +155,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--plots", action="store_true",
                         help="rerun the reference plots of the FMU pages (about 35 s)")
     args = parser.parse_args(argv)
+    from altfusion.fmi.shim import ShimBuildError, compile_shim
+
     scripts = slave_scripts()
     targets = {script: MODELS / f"{model_name(script)}.fmu" for script in scripts}
     if args.check:
@@ -152,12 +166,17 @@ def main(argv: list[str] | None = None) -> int:
         return 1 if outdated else 0
     MODELS.mkdir(exist_ok=True)
     problems = []
-    core = None
+    core = shim = None
     for script, fmu in targets.items():
         if args.force or stale(script, fmu):
             print(f"building models/{fmu.name}")
             core = core or stage_core()
-            build_fmu(script, core=core)
+            try:
+                shim = shim or compile_shim(SHIM_BUILD)
+            except ShimBuildError as error:
+                print(f"error: {error}", file=sys.stderr)
+                return 1
+            build_fmu(script, core=core, shim=shim)
         problems += [f"{fmu.name}: {p}" for p in validate_fmu(fmu)]
     if problems:
         print("\n".join(problems), file=sys.stderr)

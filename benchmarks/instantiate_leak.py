@@ -10,11 +10,17 @@ the growth per cycle is printed. ``--trace`` adds the Python allocations kept ov
 
     python benchmarks/instantiate_leak.py                      # 2000 cycles per FMU
     python benchmarks/instantiate_leak.py --cycles 500 --trace BaselineKF
+    python benchmarks/instantiate_leak.py --without-shim    # pythonfmu's library instead
+
+The native shim (``altfusion.fmi.shim``) resets a freed instance and hands it to the next
+fmi2Instantiate of the same FMU, so pythonfmu runs its per-instantiation path (which keeps
+about 1 kB) only for the first instances.
 """
 
 import argparse
 import gc
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -23,6 +29,8 @@ from pathlib import Path
 
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
+
+from altfusion.fmi.shim import PYTHONFMU_LIBRARY
 
 ROOT = Path(__file__).resolve().parents[1]
 MODELS = ROOT / "models"
@@ -47,15 +55,20 @@ def cycles(fmu: FMU2Slave, count: int, step_size: float) -> None:
         fmu.fmi2FreeInstance(fmu.component)
 
 
-def measure(name: str, warmup: int, count: int, trace: bool) -> float:
-    """Bytes of resident memory kept per cycle of the FMU ``name``."""
+def measure(name: str, warmup: int, count: int, trace: bool, without_shim: bool) -> float:
+    """Bytes of resident memory kept per cycle of the FMU ``name`` (``without_shim``: with
+    pythonfmu's library in place of our native shim, as FMUs were built before it)."""
     path = MODELS / f"{name}.fmu"
     description = read_model_description(str(path))
     step_size = float(description.defaultExperiment.stepSize)
+    identifier = description.coSimulation.modelIdentifier
     with tempfile.TemporaryDirectory() as folder:
-        fmu = FMU2Slave(guid=description.guid, unzipDirectory=extract(str(path), folder),
-                        modelIdentifier=description.coSimulation.modelIdentifier,
-                        instanceName=name)
+        unzipped = extract(str(path), folder)
+        if without_shim:
+            binaries = Path(unzipped, "binaries", "linux64")
+            shutil.copyfile(binaries / PYTHONFMU_LIBRARY, binaries / f"{identifier}.so")
+        fmu = FMU2Slave(guid=description.guid, unzipDirectory=unzipped,
+                        modelIdentifier=identifier, instanceName=name)
         cycles(fmu, warmup, step_size)
         gc.collect()
         if trace:
@@ -80,19 +93,23 @@ def main() -> None:
     parser.add_argument("--cycles", type=int, default=2000)
     parser.add_argument("--warmup", type=int, default=200)
     parser.add_argument("--trace", action="store_true")
+    parser.add_argument("--without-shim", action="store_true",
+                        help="run pythonfmu's library in place of the native shim")
     parser.add_argument("--one", action="store_true", help="measure in this process")
     args = parser.parse_args()
     if args.one:
         (name,) = args.fmus
-        growth = measure(name, args.warmup, args.cycles, args.trace)
+        growth = measure(name, args.warmup, args.cycles, args.trace, args.without_shim)
         print(f"| {name} | {growth:.0f} B |")
         return
+    binary = "pythonfmu's library" if args.without_shim else "native shim"
     print(f"| FMU | growth per instantiate/free cycle ({args.cycles} cycles, "
-          f"after {args.warmup}) |")
+          f"after {args.warmup}; {binary}) |")
     print("|---|---:|")
     for name in args.fmus:
         options = ["--cycles", str(args.cycles), "--warmup", str(args.warmup),
-                   *(["--trace"] if args.trace else [])]
+                   *(["--trace"] if args.trace else []),
+                   *(["--without-shim"] if args.without_shim else [])]
         subprocess.run([sys.executable, __file__, "--one", *options, name], check=True)
 
 

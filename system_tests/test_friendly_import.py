@@ -1,11 +1,8 @@
 """A user who imports one FMU into a tool: ``step_size`` defaults to the tool's step (the
 first doStep's; fmpy's co-simulation step is its ``output_interval``), a later different step
 or a step that does not fit the sample periods is refused with the reason logged at
-fmi2Error, and LogReplay without pyulog says so.
-
-pythonfmu 0.7.0 forwards an FMU's messages only while debug logging is on, so these tests
-ask for it (``debug_logging=True``); reaching a host that leaves it off is the native
-shim's part."""
+fmi2Error (the call returns fmi2Error: the native shim returns the worst status logged), and
+LogReplay without pyulog says so. Errors reach the host's logger with debug logging off."""
 
 import subprocess
 import sys
@@ -13,6 +10,7 @@ import sys
 import numpy as np
 import pytest
 from fmpy import simulate_fmu
+from fmpy.fmi1 import FMICallException
 
 from altfusion.cosim.instances import CosimError, FmuInstance, fmu_info
 
@@ -42,10 +40,9 @@ def test_the_default_step_size_is_the_tools_step(fmus):
 
 def test_a_step_other_than_the_set_step_size_is_refused_with_the_reason(fmus):
     messages = Messages()
-    result = simulate_fmu(str(fmus["GnssReceiver"]), output_interval=0.05, stop_time=1.0,
-                          start_values={"step_size": 0.01}, output=["gps_h"],
-                          debug_logging=True, logger=messages)
-    assert len(result) < 21
+    with pytest.raises(FMICallException, match="fmi2DoStep failed with status 3"):
+        simulate_fmu(str(fmus["GnssReceiver"]), output_interval=0.05, stop_time=1.0,
+                     start_values={"step_size": 0.01}, output=["gps_h"], logger=messages)
     assert any("communication step 0.05 s differs from parameter step_size = 0.01 s" in m
                for m in messages.errors()), messages
 
@@ -53,8 +50,9 @@ def test_a_step_other_than_the_set_step_size_is_refused_with_the_reason(fmus):
 def test_an_adopted_step_that_does_not_fit_a_sample_period_is_refused_naming_it(fmus):
     """The GNSS fix period 1 s is not a whole number of 0.3 s steps."""
     messages = Messages()
-    simulate_fmu(str(fmus["GnssReceiver"]), output_interval=0.3, stop_time=1.2, output=["gps_h"],
-                 debug_logging=True, logger=messages)
+    with pytest.raises(FMICallException, match="fmi2DoStep failed with status 3"):
+        simulate_fmu(str(fmus["GnssReceiver"]), output_interval=0.3, stop_time=1.2,
+                     output=["gps_h"], logger=messages)
     errors = messages.errors()
     assert errors and "step_size adopted from the first doStep (0.3 s)" in errors[0]
     assert "sample_period" in errors[0], errors
@@ -69,9 +67,11 @@ def test_log_replay_without_pyulog_logs_an_error_naming_pyulog(fmus):
         "seen = []\n"
         "def logger(c, i, status, cat, msg):\n"
         "    seen.append((status, msg.decode()))\n"
-        "simulate_fmu(sys.argv[1], output_interval=0.01, stop_time=0.1, debug_logging=True,\n"
-        "             start_values={'log_file': 'flightlogs/pyulog_sample_px4_events.ulg'},\n"
-        "             logger=logger)\n"
+        "try:\n"
+        "    simulate_fmu(sys.argv[1], output_interval=0.01, stop_time=0.1, logger=logger,\n"
+        "                 start_values={'log_file': 'flightlogs/pyulog_sample_px4_events.ulg'})\n"
+        "except Exception as error:\n"
+        "    print(error)\n"
         "print('\\n'.join(m for s, m in seen if s >= 3))\n"
     )
     completed = subprocess.run([sys.executable, "-c", script, str(fmus["LogReplay"])],

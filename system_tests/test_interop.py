@@ -753,12 +753,13 @@ def test_a_failing_engine_run_is_a_clear_error(tmp_path):
 
 
 @pytest.mark.parametrize(("engine", "message"), [
-    ("libcosim", "plant: Step not complete"),
+    ("libcosim", r"'plant'.*'mass' = -1\.0: must be > 0"),
     ("ecos", r"'plant'.*'mass' = -1\.0: must be > 0"),
 ])
 def test_a_bad_parameter_fails_the_engine_run_naming_it(fmus, tmp_path, engine, message):
-    """libcosim stops on the FMU's fmi2Discard; ECOS 0.7.2 ignores it, so the ECOS adapters
-    check the parameters on the core objects first."""
+    """libcosim aborts the process on the fmi2Error of fmi2ExitInitializationMode (the native
+    shim returns the error the FMU logs) and ECOS 0.7.2 ignores a failing doStep, so the
+    adapters check the parameters on the core objects first."""
     system = build_system("plant_yang2020").with_parameters({"plant.mass": -1.0})
     ssp = write_ssp(system, fmus, tmp_path / "bad.ssp")
     with pytest.raises(EngineError, match=message):

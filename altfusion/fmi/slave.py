@@ -11,14 +11,18 @@ FMI behaviour that pythonfmu 0.7.0 leaves to us:
   (``%`` escaped, since the host formats the message). ``doStep`` then returns fmi2Discard;
   pythonfmu maps any escaping exception to fmi2Fatal and gives Python code no other way to
   return an error status, so a failed initialization (a bad parameter) is logged and every
-  later ``doStep`` returns fmi2Discard with the reason.
+  later ``doStep`` returns fmi2Discard with the reason. The native shim
+  (:mod:`altfusion.fmi.shim`) returns the worst status logged during a call, so with it
+  such calls return fmi2Error.
 * The FMU state is the whole core object (filter state, random generators, tick clock), deep
   copied on get and set. Serialized, it is data, never code (:mod:`altfusion.fmi.state`): a
   header naming the model, GUID and core version, then a tagged JSON tree. pythonfmu turns
   any exception of ``_fmu_state_from_bytes`` or ``_set_fmu_state`` into fmi2Fatal and drops
   the instance's Python objects, so a refused state is not an exception: deserializing
-  returns a :class:`~altfusion.fmi.state.RefusedState` carrying the reason, and setting it
-  logs the reason at fmi2Error severity and leaves the instance as it was.
+  returns a :class:`~altfusion.fmi.state.RefusedState` carrying the reason, which the native
+  shim (:mod:`altfusion.fmi.shim`) reads: it frees the state and returns fmi2Error with the
+  reason. Setting one anyway (pythonfmu's win64 binary) logs the reason at fmi2Error severity
+  and leaves the instance as it was.
 * The GUID is a digest of the interface (:mod:`altfusion.fmi.guid`): every variable's value
   reference, name, type, causality, variability, unit, bounds and start value, the slave
   script's source and the core version.

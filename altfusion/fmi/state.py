@@ -78,7 +78,9 @@ class StateHeader:
 
 @dataclasses.dataclass(frozen=True)
 class RefusedState:
-    """What deserializing bytes that are not an acceptable state gives: the reason."""
+    """What deserializing bytes that are not an acceptable state gives: the reason (the native
+    shim, :mod:`altfusion.fmi.shim`, reads the attribute ``reason`` of the deserialized
+    object and returns fmi2Error with it)."""
 
     reason: str
 

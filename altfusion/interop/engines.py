@@ -132,13 +132,17 @@ def run_libcosim(source: Path, system: SystemSpec, fmu_paths: dict[str, Path],
     slower simulator). It has no step-0 sample of a slower simulator: those initial values are
     read from a last-value observer after the first base step, which still shows the initial
     values of a simulator that has not completed a step. Boolean signals come from the
-    last-value observer; for a simulator at the base step their t = 0 row is NaN."""
+    last-value observer; for a simulator at the base step their t = 0 row is NaN.
+
+    Parameters are checked first (:func:`reject_bad_parameters`): libcosim 0.0.6 aborts the
+    process when an FMU's fmi2ExitInitializationMode returns fmi2Error."""
     from libcosimpy.CosimEnums import CosimVariableType
     from libcosimpy.CosimExecution import CosimExecution
     from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
     from libcosimpy.CosimObserver import CosimObserver
 
     recording = Recording.of(system, fmu_paths, stop_time)
+    reject_bad_parameters(system, fmu_paths)
     log_output_level(CosimLogLevel.WARNING)
     source = Path(source)
     try:
@@ -225,7 +229,8 @@ def reject_bad_parameters(system: SystemSpec, fmu_paths: dict[str, Path]) -> Non
     :class:`EngineError` naming the first one that refuses them.
 
     ECOS 0.7.2 ignores a doStep that returns fmi2Discard or fmi2Error: a component whose
-    initialization failed would silently stop advancing. Components whose core class cannot
+    initialization failed would silently stop advancing; libcosim 0.0.6 aborts the process on
+    the fmi2Error of its fmi2ExitInitializationMode. Components whose core class cannot
     be imported here (an FMU built from other sources) are not checked."""
     for spec in system.components:
         try:

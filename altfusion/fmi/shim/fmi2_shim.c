@@ -1,0 +1,617 @@
+/*
+ * altfusion's FMI 2.0 shim: the binaries/linux64/<model>.so of every FMU, in front of
+ * pythonfmu 0.7.0's library (shipped beside it as PYTHONFMU_LIBRARY). Our own code: it
+ * forwards every FMI 2.0 co-simulation function to pythonfmu and adds what a host that uses
+ * only the standard needs (see DEVELOPERS.md, "The native shim"):
+ *
+ *  - Resource URIs: file:/p, file:///p, file://localhost/p (and percent-escapes) are all
+ *    handed to pythonfmu as file:///p, the only form it reads.
+ *  - Clean exit and unload: pythonfmu releases its static Python state twice when it is
+ *    unloaded or the process exits (C++ static destructor, then its unload hook) unless
+ *    finalizePythonInterpreter ran first. Once pythonfmu is loaded, the shim registers a
+ *    handler that calls the finalizer: handlers run in reverse order of registration, at exit
+ *    or when the host unloads the shim, so it runs before pythonfmu's static destructors.
+ *    In a C host pythonfmu starts the interpreter, which cannot be started twice (numpy): the
+ *    shim then loads pythonfmu with RTLD_NODELETE and pins itself the same way, so both stay
+ *    until exit. In a Python host both unload with the host's dlclose (each unload and reload
+ *    would otherwise keep ~0.4 MB). Calling the finalizer again is harmless.
+ *  - Failures reach the host: pythonfmu is instantiated with logging on; messages of status
+ *    fmi2Warning or worse reach the host's logger whatever loggingOn says, the others when the
+ *    host asked for them (loggingOn, fmi2SetDebugLogging and its categories). Every call
+ *    returns the worst status logged during it, so an error the Python side can only log
+ *    (a refused FMU state, a failed initialization) returns fmi2Error. A state refused by
+ *    fmi2DeSerializeFMUstate (the Python object carries a `reason`) is freed and returns
+ *    fmi2Error with that reason.
+ *  - Instances are reused: fmi2FreeInstance resets a healthy instance (fmi2Reset) and keeps
+ *    up to POOL_SIZE of them; fmi2Instantiate of the same GUID and resources hands one back.
+ *    pythonfmu re-executes the slave script at each fmi2Instantiate and keeps ~1 kB per call.
+ *    Pooled instances are freed when the shim is unloaded (or at exit, if Python still runs).
+ *
+ * Built by build_fmu.py with the system compiler: cc -shared -fPIC -Wl,-z,now (no Python
+ * headers: the few Python C-API functions used are declared below and, like pythonfmu's,
+ * resolved from the Python already in the process).
+ */
+#define _GNU_SOURCE
+#include <ctype.h>
+#include <dlfcn.h>
+#include <pthread.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* glibc >= 2.34 versions the dl* functions anew; bind the x86-64 baseline versions so the
+ * shim needs no newer glibc than pythonfmu's library (2.32). */
+#if defined(__x86_64__) && defined(__GLIBC__)
+__asm__(".symver dlopen,dlopen@GLIBC_2.2.5");
+__asm__(".symver dlsym,dlsym@GLIBC_2.2.5");
+__asm__(".symver dladdr,dladdr@GLIBC_2.2.5");
+__asm__(".symver dlerror,dlerror@GLIBC_2.2.5");
+__asm__(".symver dlclose,dlclose@GLIBC_2.2.5");
+#endif
+
+#ifndef PYTHONFMU_LIBRARY
+#define PYTHONFMU_LIBRARY "pythonfmu-export.so"
+#endif
+#define POOL_SIZE 4
+#define MAX_CATEGORIES 32
+#define EXPORT __attribute__((visibility("default")))
+
+/* ---------------------------------------------------------------- FMI 2.0 types (standard) */
+typedef void* fmi2Component;
+typedef void* fmi2ComponentEnvironment;
+typedef void* fmi2FMUstate;
+typedef unsigned int fmi2ValueReference;
+typedef double fmi2Real;
+typedef int fmi2Integer;
+typedef int fmi2Boolean;
+typedef char fmi2Char;
+typedef const fmi2Char* fmi2String;
+typedef char fmi2Byte;
+#define fmi2True 1
+#define fmi2False 0
+
+typedef enum { fmi2OK, fmi2Warning, fmi2Discard, fmi2Error, fmi2Fatal, fmi2Pending } fmi2Status;
+typedef enum { fmi2ModelExchange, fmi2CoSimulation } fmi2Type;
+typedef enum {
+    fmi2DoStepStatus, fmi2PendingStatus, fmi2LastSuccessfulTime, fmi2Terminated
+} fmi2StatusKind;
+
+typedef void (*fmi2CallbackLogger)(fmi2ComponentEnvironment, fmi2String, fmi2Status, fmi2String,
+                                   fmi2String, ...);
+typedef void* (*fmi2CallbackAllocateMemory)(size_t, size_t);
+typedef void (*fmi2CallbackFreeMemory)(void*);
+typedef void (*fmi2StepFinished)(fmi2ComponentEnvironment, fmi2Status);
+typedef struct {
+    fmi2CallbackLogger logger;
+    fmi2CallbackAllocateMemory allocateMemory;
+    fmi2CallbackFreeMemory freeMemory;
+    fmi2StepFinished stepFinished;
+    fmi2ComponentEnvironment componentEnvironment;
+} fmi2CallbackFunctions;
+
+/* The functions pythonfmu exports besides the two answered here (fmi2GetTypesPlatform,
+ * fmi2GetVersion), with their standard prototypes; the shim exports each of them. */
+EXPORT fmi2Component fmi2Instantiate(fmi2String, fmi2Type, fmi2String, fmi2String,
+                                     const fmi2CallbackFunctions*, fmi2Boolean, fmi2Boolean);
+EXPORT void fmi2FreeInstance(fmi2Component);
+EXPORT fmi2Status fmi2SetDebugLogging(fmi2Component, fmi2Boolean, size_t, const fmi2String[]);
+EXPORT fmi2Status fmi2SetupExperiment(fmi2Component, fmi2Boolean, fmi2Real, fmi2Real,
+                                      fmi2Boolean, fmi2Real);
+EXPORT fmi2Status fmi2EnterInitializationMode(fmi2Component);
+EXPORT fmi2Status fmi2ExitInitializationMode(fmi2Component);
+EXPORT fmi2Status fmi2Terminate(fmi2Component);
+EXPORT fmi2Status fmi2Reset(fmi2Component);
+EXPORT fmi2Status fmi2GetReal(fmi2Component, const fmi2ValueReference[], size_t, fmi2Real[]);
+EXPORT fmi2Status fmi2GetInteger(fmi2Component, const fmi2ValueReference[], size_t,
+                                 fmi2Integer[]);
+EXPORT fmi2Status fmi2GetBoolean(fmi2Component, const fmi2ValueReference[], size_t,
+                                 fmi2Boolean[]);
+EXPORT fmi2Status fmi2GetString(fmi2Component, const fmi2ValueReference[], size_t, fmi2String[]);
+EXPORT fmi2Status fmi2SetReal(fmi2Component, const fmi2ValueReference[], size_t,
+                              const fmi2Real[]);
+EXPORT fmi2Status fmi2SetInteger(fmi2Component, const fmi2ValueReference[], size_t,
+                                 const fmi2Integer[]);
+EXPORT fmi2Status fmi2SetBoolean(fmi2Component, const fmi2ValueReference[], size_t,
+                                 const fmi2Boolean[]);
+EXPORT fmi2Status fmi2SetString(fmi2Component, const fmi2ValueReference[], size_t,
+                                const fmi2String[]);
+EXPORT fmi2Status fmi2GetFMUstate(fmi2Component, fmi2FMUstate*);
+EXPORT fmi2Status fmi2SetFMUstate(fmi2Component, fmi2FMUstate);
+EXPORT fmi2Status fmi2FreeFMUstate(fmi2Component, fmi2FMUstate*);
+EXPORT fmi2Status fmi2SerializedFMUstateSize(fmi2Component, fmi2FMUstate, size_t*);
+EXPORT fmi2Status fmi2SerializeFMUstate(fmi2Component, fmi2FMUstate, fmi2Byte[], size_t);
+EXPORT fmi2Status fmi2DeSerializeFMUstate(fmi2Component, const fmi2Byte[], size_t,
+                                          fmi2FMUstate*);
+EXPORT fmi2Status fmi2GetDirectionalDerivative(fmi2Component, const fmi2ValueReference[], size_t,
+                                               const fmi2ValueReference[], size_t,
+                                               const fmi2Real[], fmi2Real[]);
+EXPORT fmi2Status fmi2SetRealInputDerivatives(fmi2Component, const fmi2ValueReference[], size_t,
+                                              const fmi2Integer[], const fmi2Real[]);
+EXPORT fmi2Status fmi2GetRealOutputDerivatives(fmi2Component, const fmi2ValueReference[], size_t,
+                                               const fmi2Integer[], fmi2Real[]);
+EXPORT fmi2Status fmi2DoStep(fmi2Component, fmi2Real, fmi2Real, fmi2Boolean);
+EXPORT fmi2Status fmi2CancelStep(fmi2Component);
+EXPORT fmi2Status fmi2GetStatus(fmi2Component, const fmi2StatusKind, fmi2Status*);
+EXPORT fmi2Status fmi2GetRealStatus(fmi2Component, const fmi2StatusKind, fmi2Real*);
+EXPORT fmi2Status fmi2GetIntegerStatus(fmi2Component, const fmi2StatusKind, fmi2Integer*);
+EXPORT fmi2Status fmi2GetBooleanStatus(fmi2Component, const fmi2StatusKind, fmi2Boolean*);
+EXPORT fmi2Status fmi2GetStringStatus(fmi2Component, const fmi2StatusKind, fmi2String*);
+EXPORT void finalizePythonInterpreter(void);
+
+/* ---------------------------------------------------------------- Python C-API (stable ABI)
+ * Resolved from the host process, as pythonfmu's library resolves its own (no headers). The
+ * shim is linked with -z now: in a process without Python it does not load at all, the
+ * loader naming the missing symbol, as pythonfmu's library does. */
+typedef struct PyObject PyObject;
+typedef int PyGILState_STATE;
+extern int Py_IsInitialized(void);
+extern PyGILState_STATE PyGILState_Ensure(void);
+extern void PyGILState_Release(PyGILState_STATE);
+extern PyObject* PyObject_GetAttrString(PyObject*, const char*);
+extern const char* PyUnicode_AsUTF8(PyObject*);
+extern void Py_DecRef(PyObject*);
+extern void PyErr_Clear(void);
+
+#define FORWARDED(X) \
+    X(fmi2Instantiate) X(fmi2FreeInstance) X(fmi2SetupExperiment) \
+    X(fmi2EnterInitializationMode) X(fmi2ExitInitializationMode) X(fmi2Terminate) X(fmi2Reset) \
+    X(fmi2GetReal) X(fmi2GetInteger) X(fmi2GetBoolean) X(fmi2GetString) \
+    X(fmi2SetReal) X(fmi2SetInteger) X(fmi2SetBoolean) X(fmi2SetString) \
+    X(fmi2GetFMUstate) X(fmi2SetFMUstate) X(fmi2FreeFMUstate) X(fmi2SerializedFMUstateSize) \
+    X(fmi2SerializeFMUstate) X(fmi2DeSerializeFMUstate) X(fmi2GetDirectionalDerivative) \
+    X(fmi2SetRealInputDerivatives) X(fmi2GetRealOutputDerivatives) X(fmi2DoStep) \
+    X(fmi2CancelStep) X(fmi2GetStatus) X(fmi2GetRealStatus) X(fmi2GetIntegerStatus) \
+    X(fmi2GetBooleanStatus) X(fmi2GetStringStatus)
+
+#define MEMBER(name) __typeof__(name)* name;
+static struct { FORWARDED(MEMBER) void (*finalize)(void); } pythonfmu;
+
+/* ---------------------------------------------------------------- instances */
+typedef struct Instance {
+    fmi2Component inner;                 /* pythonfmu's instance */
+    fmi2CallbackFunctions host;          /* the host's callbacks (its logger, environment) */
+    fmi2CallbackFunctions own;           /* what pythonfmu got: our logger, this instance */
+    char* name;                          /* the host's instance name */
+    char* guid;
+    char* resources;                     /* the decoded resource folder */
+    fmi2Type type;
+    int logging;                         /* the host asked for messages below fmi2Warning */
+    size_t n_categories;                 /* ... of these categories only (0: all) */
+    char* categories[MAX_CATEGORIES];
+    fmi2Status worst;                    /* the worst status logged during the current call */
+    int broken;                          /* a call returned fmi2Fatal: never reused */
+} Instance;
+
+static pthread_mutex_t lock = PTHREAD_MUTEX_INITIALIZER;
+static int load_state;                   /* 0: not tried, 1: loaded, -1: failed */
+static char load_error[4400];
+static Instance* pool[POOL_SIZE];
+static size_t pooled;
+
+static char* copy_string(const char* text) {
+    return text ? strdup(text) : NULL;
+}
+
+static fmi2Status worse(fmi2Status a, fmi2Status b) {
+    if (a == fmi2Pending || b == fmi2Pending) return a == fmi2Pending ? a : b;
+    return a > b ? a : b;
+}
+
+static void clear_categories(Instance* inst) {
+    for (size_t i = 0; i < inst->n_categories; i++) free(inst->categories[i]);
+    inst->n_categories = 0;
+}
+
+static void destroy(Instance* inst) {
+    clear_categories(inst);
+    free(inst->name);
+    free(inst->guid);
+    free(inst->resources);
+    free(inst);
+}
+
+/* ---------------------------------------------------------------- logging */
+static int wanted(const Instance* inst, fmi2Status status, fmi2String category) {
+    if (status != fmi2OK && status != fmi2Pending) return 1;
+    if (!inst->logging) return 0;
+    if (inst->n_categories == 0) return 1;
+    for (size_t i = 0; i < inst->n_categories; i++)
+        if (category && strcmp(category, inst->categories[i]) == 0) return 1;
+    return 0;
+}
+
+/* Hand `text` (already formatted) to the host's logger, '%' escaped: the host formats it. */
+static void to_host(const Instance* inst, fmi2Status status, fmi2String category,
+                    const char* text) {
+    if (!inst->host.logger || !wanted(inst, status, category)) return;
+    size_t percents = 0;
+    for (const char* p = text; *p; p++) percents += *p == '%';
+    char* escaped = malloc(strlen(text) + percents + 1);
+    if (!escaped) return;
+    char* out = escaped;
+    for (const char* p = text; *p; p++) {
+        *out++ = *p;
+        if (*p == '%') *out++ = '%';
+    }
+    *out = '\0';
+    inst->host.logger(inst->host.componentEnvironment, inst->name ? inst->name : "",
+                      status, category ? category : "", escaped);
+    free(escaped);
+}
+
+static void log_own(Instance* inst, fmi2Status status, const char* format, ...) {
+    char text[2048];
+    va_list args;
+    va_start(args, format);
+    vsnprintf(text, sizeof text, format, args);
+    va_end(args);
+    inst->worst = worse(inst->worst, status);
+    const char* category = status >= fmi2Error ? "logStatusError" : "logAll";
+    to_host(inst, status, status == fmi2Fatal ? "logStatusFatal" : category, text);
+}
+
+/* The logger pythonfmu calls: format the message, remember the worst status, pass it on. */
+static void shim_logger(fmi2ComponentEnvironment env, fmi2String instance_name,
+                        fmi2Status status, fmi2String category, fmi2String message, ...) {
+    (void)instance_name;   /* pythonfmu's copy; a reused instance has a new host name */
+    Instance* inst = env;
+    if (!inst || !message) return;
+    inst->worst = worse(inst->worst, status);
+    va_list args;
+    va_start(args, message);
+    va_list again;
+    va_copy(again, args);
+    int length = vsnprintf(NULL, 0, message, args);
+    va_end(args);
+    char* text = length >= 0 ? malloc((size_t)length + 1) : NULL;
+    if (text) {
+        vsnprintf(text, (size_t)length + 1, message, again);
+        to_host(inst, status, category, text);
+        free(text);
+    }
+    va_end(again);
+}
+
+/* ---------------------------------------------------------------- loading pythonfmu */
+static void* library;                    /* pythonfmu's */
+static int owns_interpreter;             /* pythonfmu started the interpreter (a C host) */
+
+static int python_alive(void) {
+    return Py_IsInitialized();
+}
+
+/* Run at exit, or when the host unloads this library (a handler registered by a shared
+ * library also runs at its dlclose): release pythonfmu's state before its static destructors
+ * and unload hook do (twice); pooled instances are freed while their Python is alive. */
+static void release_pythonfmu(void) {
+    int alive = python_alive();
+    pthread_mutex_lock(&lock);
+    for (size_t i = 0; i < pooled; i++) {
+        if (alive) pythonfmu.fmi2FreeInstance(pool[i]->inner);
+        destroy(pool[i]);
+    }
+    pooled = 0;
+    pthread_mutex_unlock(&lock);
+    if (pythonfmu.finalize) pythonfmu.finalize();
+    if (!owns_interpreter && alive) {   /* unloaded by a Python host: unload pythonfmu too */
+        dlclose(library);
+        library = NULL;
+        load_state = 0;
+    }
+}
+
+static int load_pythonfmu(void) {
+    pthread_mutex_lock(&lock);
+    if (load_state != 0) {
+        pthread_mutex_unlock(&lock);
+        return load_state > 0;
+    }
+    Dl_info self;
+    char path[4096];
+    load_state = -1;
+    if (!dladdr((void*)&load_pythonfmu, &self) || !self.dli_fname) {
+        snprintf(load_error, sizeof load_error, "cannot find the FMU's own library file");
+        goto done;
+    }
+    const char* slash = strrchr(self.dli_fname, '/');
+    int folder = slash ? (int)(slash - self.dli_fname) + 1 : 0;
+    snprintf(path, sizeof path, "%.*s%s", folder, self.dli_fname, PYTHONFMU_LIBRARY);
+    /* In a host without a running Python, pythonfmu starts the interpreter and must never be
+     * unloaded (finalized, numpy cannot be imported again): it and this library stay. */
+    owns_interpreter = !python_alive();
+    library = dlopen(path, RTLD_NOW | RTLD_LOCAL | (owns_interpreter ? RTLD_NODELETE : 0));
+    if (!library) {
+        snprintf(load_error, sizeof load_error, "cannot load pythonfmu's library: %s",
+                 dlerror());
+        goto done;
+    }
+#define RESOLVE(name) \
+    if (!(pythonfmu.name = (__typeof__(name)*)dlsym(library, #name))) { \
+        snprintf(load_error, sizeof load_error, "%s lacks %s", path, #name); \
+        goto done; \
+    }
+    FORWARDED(RESOLVE)
+#undef RESOLVE
+    pythonfmu.finalize = (void (*)(void))dlsym(library, "finalizePythonInterpreter");
+    if (owns_interpreter) dlopen(self.dli_fname, RTLD_NOW | RTLD_NOLOAD | RTLD_NODELETE);
+    atexit(release_pythonfmu);   /* after pythonfmu's static constructors: runs before */
+    load_state = 1;
+done:
+    pthread_mutex_unlock(&lock);
+    return load_state > 0;
+}
+
+EXPORT void finalizePythonInterpreter(void) {
+    if (load_state > 0 && pythonfmu.finalize) pythonfmu.finalize();
+}
+
+/* ---------------------------------------------------------------- resource URIs */
+static int hex_digit(char c) {
+    if (c >= '0' && c <= '9') return c - '0';
+    c = (char)tolower((unsigned char)c);
+    return c >= 'a' && c <= 'f' ? c - 'a' + 10 : -1;
+}
+
+/* The local folder a resource location names (file:/p, file:///p, file://localhost/p, or a
+ * plain absolute path), percent-decoded; NULL with the reason in `error`. */
+static char* resource_folder(fmi2String location, char* error, size_t size) {
+    if (!location || !*location) {
+        snprintf(error, size, "no resource location given");
+        return NULL;
+    }
+    const char* path = location;
+    if (strncasecmp(location, "file:", 5) == 0) {
+        path = location + 5;
+        if (strncmp(path, "//", 2) == 0) {
+            const char* authority = path + 2;
+            const char* end = strchr(authority, '/');
+            size_t length = end ? (size_t)(end - authority) : strlen(authority);
+            if (!end || (length && !(length == 9 && strncasecmp(authority, "localhost", 9) == 0))) {
+                snprintf(error, size, "resource location '%s' names no local folder "
+                         "(expected file:/path, file:///path or file://localhost/path)", location);
+                return NULL;
+            }
+            path = end;
+        }
+    }
+    if (path[0] != '/') {
+        snprintf(error, size, "resource location '%s' is not an absolute file URI "
+                 "(expected file:/path, file:///path or file://localhost/path)", location);
+        return NULL;
+    }
+    char* folder = malloc(strlen(path) + 1);
+    if (!folder) {
+        snprintf(error, size, "out of memory");
+        return NULL;
+    }
+    char* out = folder;
+    for (const char* p = path; *p; p++) {
+        if (*p != '%') {
+            *out++ = *p;
+            continue;
+        }
+        int high = p[1] ? hex_digit(p[1]) : -1, low = high >= 0 && p[2] ? hex_digit(p[2]) : -1;
+        if (high < 0 || low < 0 || (high == 0 && low == 0)) {
+            snprintf(error, size, "resource location '%s' has an invalid percent-escape",
+                     location);
+            free(folder);
+            return NULL;
+        }
+        *out++ = (char)(high * 16 + low);
+        p += 2;
+    }
+    *out = '\0';
+    if (strstr(folder, "%20")) {   /* pythonfmu would read it as a space */
+        snprintf(error, size, "resource folder '%s' contains '%%20', which pythonfmu misreads",
+                 folder);
+        free(folder);
+        return NULL;
+    }
+    return folder;
+}
+
+/* ---------------------------------------------------------------- life cycle */
+static Instance* take_pooled(fmi2String guid, const char* resources, fmi2Type type) {
+    Instance* found = NULL;
+    pthread_mutex_lock(&lock);
+    for (size_t i = 0; i < pooled; i++) {
+        Instance* candidate = pool[i];
+        if (candidate->type == type && strcmp(candidate->guid, guid ? guid : "") == 0
+                && strcmp(candidate->resources, resources) == 0) {
+            found = candidate;
+            pool[i] = pool[--pooled];
+            break;
+        }
+    }
+    pthread_mutex_unlock(&lock);
+    return found;
+}
+
+static int put_pooled(Instance* inst) {
+    int kept = 0;
+    pthread_mutex_lock(&lock);
+    if (pooled < POOL_SIZE) {
+        pool[pooled++] = inst;
+        kept = 1;
+    }
+    pthread_mutex_unlock(&lock);
+    return kept;
+}
+
+EXPORT fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
+                                     fmi2String location,
+                                     const fmi2CallbackFunctions* functions,
+                                     fmi2Boolean visible, fmi2Boolean logging_on) {
+    if (!functions) return NULL;
+    char error[1500];
+    Instance probe = {.host = *functions, .name = (char*)name};   /* to report failures */
+    if (!load_pythonfmu()) {
+        log_own(&probe, fmi2Fatal, "fmi2Instantiate: %s", load_error);
+        return NULL;
+    }
+    char* resources = resource_folder(location, error, sizeof error);
+    if (!resources) {
+        log_own(&probe, fmi2Error, "fmi2Instantiate: %s", error);
+        return NULL;
+    }
+    Instance* inst = take_pooled(guid, resources, type);
+    if (inst) {
+        free(resources);
+        free(inst->name);
+        inst->name = copy_string(name);
+        inst->host = *functions;
+        inst->logging = logging_on;
+        return inst;
+    }
+    inst = calloc(1, sizeof *inst);
+    char* uri = malloc(strlen(resources) + 8);
+    if (!inst || !uri) {
+        free(inst);
+        free(uri);
+        free(resources);
+        log_own(&probe, fmi2Fatal, "fmi2Instantiate: out of memory");
+        return NULL;
+    }
+    sprintf(uri, "file://%s", resources);
+    inst->host = *functions;
+    inst->own = (fmi2CallbackFunctions){shim_logger, calloc, free, NULL, inst};
+    inst->name = copy_string(name);
+    inst->guid = copy_string(guid ? guid : "");
+    inst->resources = resources;
+    inst->type = type;
+    inst->logging = logging_on;
+    inst->inner = pythonfmu.fmi2Instantiate(name, type, guid, uri, &inst->own, visible, fmi2True);
+    free(uri);
+    if (!inst->inner) {
+        destroy(inst);
+        return NULL;
+    }
+    return inst;
+}
+
+EXPORT void fmi2FreeInstance(fmi2Component c) {
+    Instance* inst = c;
+    if (!inst) return;
+    inst->worst = fmi2OK;
+    if (!inst->broken && pythonfmu.fmi2Reset(inst->inner) == fmi2OK && inst->worst <= fmi2Warning) {
+        inst->host.logger = NULL;   /* the host's callbacks end here */
+        clear_categories(inst);
+        if (put_pooled(inst)) return;
+    }
+    pythonfmu.fmi2FreeInstance(inst->inner);
+    destroy(inst);
+}
+
+EXPORT fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean on, size_t count,
+                                      const fmi2String categories[]) {
+    Instance* inst = c;
+    if (!inst) return fmi2Error;
+    clear_categories(inst);
+    inst->logging = on;
+    if (count > MAX_CATEGORIES) {
+        inst->worst = fmi2OK;
+        log_own(inst, fmi2Warning, "fmi2SetDebugLogging: more than %d categories, logging all",
+                MAX_CATEGORIES);
+        return fmi2Warning;
+    }
+    for (size_t i = 0; on && categories && i < count; i++)
+        if (categories[i]) inst->categories[inst->n_categories++] = strdup(categories[i]);
+    return fmi2OK;
+}
+
+/* ---------------------------------------------------------------- forwarding */
+#define ARGS(...) __VA_ARGS__
+#define BEGIN(c) \
+    Instance* inst = (c); \
+    if (!inst) return fmi2Error; \
+    inst->worst = fmi2OK;
+#define END(status) \
+    fmi2Status result = (status); /* before reading inst->worst, which the call updates */ \
+    result = worse(result, inst->worst); \
+    if (result == fmi2Fatal) inst->broken = 1; \
+    return result;
+#define FORWARD(name, params, args) \
+    EXPORT fmi2Status name(fmi2Component c, ARGS params) { \
+        BEGIN(c) \
+        END(pythonfmu.name(inst->inner, ARGS args)) \
+    }
+#define FORWARD0(name) \
+    EXPORT fmi2Status name(fmi2Component c) { \
+        BEGIN(c) \
+        END(pythonfmu.name(inst->inner)) \
+    }
+
+FORWARD(fmi2SetupExperiment, (fmi2Boolean a, fmi2Real b, fmi2Real d, fmi2Boolean e, fmi2Real f),
+        (a, b, d, e, f))
+FORWARD0(fmi2EnterInitializationMode)
+FORWARD0(fmi2ExitInitializationMode)
+FORWARD0(fmi2Terminate)
+FORWARD0(fmi2Reset)
+FORWARD0(fmi2CancelStep)
+FORWARD(fmi2GetReal, (const fmi2ValueReference v[], size_t n, fmi2Real x[]), (v, n, x))
+FORWARD(fmi2GetInteger, (const fmi2ValueReference v[], size_t n, fmi2Integer x[]), (v, n, x))
+FORWARD(fmi2GetBoolean, (const fmi2ValueReference v[], size_t n, fmi2Boolean x[]), (v, n, x))
+FORWARD(fmi2GetString, (const fmi2ValueReference v[], size_t n, fmi2String x[]), (v, n, x))
+FORWARD(fmi2SetReal, (const fmi2ValueReference v[], size_t n, const fmi2Real x[]), (v, n, x))
+FORWARD(fmi2SetInteger, (const fmi2ValueReference v[], size_t n, const fmi2Integer x[]),
+        (v, n, x))
+FORWARD(fmi2SetBoolean, (const fmi2ValueReference v[], size_t n, const fmi2Boolean x[]),
+        (v, n, x))
+FORWARD(fmi2SetString, (const fmi2ValueReference v[], size_t n, const fmi2String x[]), (v, n, x))
+FORWARD(fmi2GetFMUstate, (fmi2FMUstate* s), (s))
+FORWARD(fmi2SetFMUstate, (fmi2FMUstate s), (s))
+FORWARD(fmi2FreeFMUstate, (fmi2FMUstate* s), (s))
+FORWARD(fmi2SerializedFMUstateSize, (fmi2FMUstate s, size_t* n), (s, n))
+FORWARD(fmi2SerializeFMUstate, (fmi2FMUstate s, fmi2Byte b[], size_t n), (s, b, n))
+FORWARD(fmi2GetDirectionalDerivative,
+        (const fmi2ValueReference u[], size_t nu, const fmi2ValueReference z[], size_t nz,
+         const fmi2Real du[], fmi2Real dz[]), (u, nu, z, nz, du, dz))
+FORWARD(fmi2SetRealInputDerivatives,
+        (const fmi2ValueReference v[], size_t n, const fmi2Integer o[], const fmi2Real x[]),
+        (v, n, o, x))
+FORWARD(fmi2GetRealOutputDerivatives,
+        (const fmi2ValueReference v[], size_t n, const fmi2Integer o[], fmi2Real x[]),
+        (v, n, o, x))
+FORWARD(fmi2DoStep, (fmi2Real t, fmi2Real h, fmi2Boolean flag), (t, h, flag))
+FORWARD(fmi2GetStatus, (const fmi2StatusKind k, fmi2Status* x), (k, x))
+FORWARD(fmi2GetRealStatus, (const fmi2StatusKind k, fmi2Real* x), (k, x))
+FORWARD(fmi2GetIntegerStatus, (const fmi2StatusKind k, fmi2Integer* x), (k, x))
+FORWARD(fmi2GetBooleanStatus, (const fmi2StatusKind k, fmi2Boolean* x), (k, x))
+FORWARD(fmi2GetStringStatus, (const fmi2StatusKind k, fmi2String* x), (k, x))
+
+/* ---------------------------------------------------------------- refused states */
+/* The reason a deserialized state was refused (its Python object's `reason`, a str; see
+ * altfusion.fmi.state.RefusedState), copied into `reason`; 0 if the state was accepted. */
+static int refusal(fmi2FMUstate state, char* reason, size_t size) {
+    if (!state) return 0;
+    PyGILState_STATE gil = PyGILState_Ensure();
+    PyObject* value = PyObject_GetAttrString((PyObject*)state, "reason");
+    const char* text = value ? PyUnicode_AsUTF8(value) : NULL;
+    if (text) snprintf(reason, size, "%s", text);
+    PyErr_Clear();
+    if (value) Py_DecRef(value);
+    PyGILState_Release(gil);
+    return text != NULL;
+}
+
+EXPORT fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte bytes[], size_t size,
+                                          fmi2FMUstate* state) {
+    BEGIN(c)
+    fmi2Status status = pythonfmu.fmi2DeSerializeFMUstate(inst->inner, bytes, size, state);
+    char reason[1500];
+    if (status <= fmi2Warning && state && refusal(*state, reason, sizeof reason)) {
+        pythonfmu.fmi2FreeFMUstate(inst->inner, state);
+        *state = NULL;
+        log_own(inst, fmi2Error, "fmi2DeSerializeFMUstate refused the state: %s", reason);
+    }
+    END(status)
+}
+
+EXPORT const char* fmi2GetTypesPlatform(void) {
+    return "default";
+}
+
+EXPORT const char* fmi2GetVersion(void) {
+    return "2.0";
+}
