@@ -94,7 +94,7 @@ def test_gnss_outage_drops_the_fix_then_returns_off():
 
 def test_early_late_samples_shift_the_stamps_only():
     f = Feed(scenario="early_late_samples", fault_start=0.0).until(1.0)
-    assert f.gps_time == pytest.approx(1.1) and f.radar_time == pytest.approx(1.1)
+    assert f.gps_time == pytest.approx(1.05) and f.radar_time == pytest.approx(1.05)
     assert f.baro_time == pytest.approx(0.98) and f.acc_time == pytest.approx(0.98)
     assert (f.gps_h, f.baro_h) == (101.0, 100.0)
 

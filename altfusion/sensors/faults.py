@@ -167,7 +167,9 @@ class SensorFaultsParams:
     front_drop: float = param(300.0, "Pa", "weather_front: static-pressure fall (3 hPa)")
     front_time: float = param(3600.0, "s", "weather_front: duration of the fall",
                               positive=True)
-    stamp_lead: float = param(0.1, "s", "early_late_samples: GNSS and radar stamps ahead",
+    stamp_lead: float = param(0.05, "s", "early_late_samples: GNSS and radar stamps ahead "
+                                         "(below their sample period: ECOS shows a slow "
+                                         "component's sample at most one step early)",
                               min=0.0)
     stamp_lag: float = param(0.02, "s", "early_late_samples: baro, acc, laser stamps behind",
                              min=0.0)
