@@ -52,8 +52,6 @@ HAJIYEV_GNSS = ("HajiyevAdaptiveEstimator gates the GNSS on the jump of its resi
 REFERENCE_GNSS = ("the estimator takes the GNSS as its height reference (a baro bias state "
                   "absorbs the rest): GNSS +10 m is a 10 m height error, beyond 3x the nominal "
                   "RMS (PX4 with GNSS as reference does the same)")
-READMITTED = ("the GNSS back 50 m off is isolated within 4 s but re-admitted 20-60 s later "
-              "(the isolation flag clears; not yet analysed), and pulls the height off")
 YANG_WEIGHTS = ("YangFusionKF's optimal weighting (eqs. 7-8) has no baro-bias state: a baro "
                 "error of 5-10 m moves the fused height by the baro's weight 0.18, beyond 3x "
                 "the filter's 0.2 m nominal RMS")
@@ -70,8 +68,6 @@ KNOWN_FAILURES: dict[tuple[str, str, str], str] = {
     ("recovery", "baro_step", "XuSHAEKF"): (
         "with its barometer isolated above the laser's 25 m, XuSHAEKF has the 30 m GNSS and "
         "the accelerometer only: 5.4 m RMS against 1.0 m nominal"),
-    ("recovery", "gnss_outage_return_off", "BaselineKF"): READMITTED,
-    ("recovery", "gnss_outage_return_off", "XuSHAEKF"): READMITTED,
     ("recovery", "all_fail", "BaselineKF"): REFERENCE_GNSS,
     ("recovery", "all_fail", "XuSHAEKF"): REFERENCE_GNSS,
     ("recovery", "all_fail", "YangFusionKF"): YANG_WEIGHTS,
@@ -165,3 +161,19 @@ def test_nominal_coverage_of_two_h_std_is_honest(suite, request, estimator):
                               results[f"{estimator}.h_std"], results[f"{estimator}.h_valid"])
     low, high = scores.HONEST_COVERAGE
     assert not math.isnan(covered) and low <= covered <= high, covered
+
+
+def test_cli_run_applies_a_fault_to_any_system(ssp_files, tmp_path, capsys):
+    """``altfusion run SSP --fault NAME``: the SensorFaults FMU found next to the SSP, the
+    system renamed, its parameters settable with --set."""
+    from altfusion.cli import main
+    from altfusion.cosim.results import Results
+
+    status = main(["run", str(ssp_files["yang2020"]), "--fault", "baro_step",
+                   "--set", "fault.fault_start=0.5", "--stop", "1", "--out", str(tmp_path)])
+    out = capsys.readouterr().out
+    assert status == 0
+    assert out.startswith("yang2020+baro_step: ")
+    results = Results.from_csv(tmp_path / "yang2020+baro_step.csv")
+    active = results["fault.fault_active"]
+    assert active[results.time < 0.5].max() == 0 and active[-1] == 1

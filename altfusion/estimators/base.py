@@ -100,6 +100,11 @@ BIAS_MIN_SAMPLES = 5
 """Fewest samples in a source's window before its bias test can reject it."""
 
 
+READMIT_SIGMAS = 2.0
+"""An isolated height source is re-admitted when the mean of its innovations over
+``reset_timeout`` lies within this many standard deviations of that mean (95 % of the time
+for a consistent source)."""
+
 MAX_WINDOW_VALUE = 1e100
 """Innovations and variances entering a bias window are clipped to this magnitude, so that
 its running sums stay finite."""
@@ -458,9 +463,11 @@ class Estimator(Component):
         that lags every source alike (an overconfident filter in a climb) moves every mean
         alike and isolates none. Every sample enters the window, fused or not, clipped to
         the gate (one wild sample cannot bias the mean: it moves it by at most one gate
-        half-width over n). An isolated source stays rejected while its own mean fails the
-        test, whatever the other sources do (PX4: a GNSS back 50 m off is not re-admitted);
-        it is re-admitted once its biased samples have left the window."""
+        half-width over n). An isolated source stays rejected while its own mean lies beyond
+        :data:`READMIT_SIGMAS` standard deviations, whatever the other sources do (PX4: a GNSS
+        back 50 m off is not re-admitted; the margin keeps a 50 m offset under a 30 m noise
+        from slipping back in on a few low samples); it is re-admitted once its biased
+        samples have left the window."""
         if not (self.params.fault_detection and source in HEIGHT_SOURCES):
             return False
         now, timeout = self.time, self.params.reset_timeout
@@ -468,11 +475,13 @@ class Estimator(Component):
         half_width = sigmas * math.sqrt(max(variance, 0.0))
         window.add(now, min(max(innovation, -half_width), half_width), variance, timeout)
         mean, spread = window.mean(), math.sqrt(window.mean_variance())
-        biased = window.n >= BIAS_MIN_SAMPLES and abs(mean) > sigmas * spread
-        if not self._source_status & source_bit(source, SourceBit.ISOLATED):
-            biased = biased and any(other != source and now - fused <= timeout
-                                    and self._agrees(other, sigmas, mean, spread)
-                                    for other, fused in self._last_fused.items())
+        if self._source_status & source_bit(source, SourceBit.ISOLATED):
+            biased = window.n >= BIAS_MIN_SAMPLES and abs(mean) > READMIT_SIGMAS * spread
+        else:
+            biased = window.n >= BIAS_MIN_SAMPLES and abs(mean) > sigmas * spread and any(
+                other != source and now - fused <= timeout
+                and self._agrees(other, sigmas, mean, spread)
+                for other, fused in self._last_fused.items())
         self._disagrees[source] = biased
         return biased
 

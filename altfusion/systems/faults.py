@@ -147,9 +147,9 @@ def with_fault(spec: SystemSpec, fault: str) -> SystemSpec:
     present = {prefix for prefix in STREAMS if f"{prefix}_count" in producers}
     missing = [source for source in scenario.needs if source not in present]
     if missing:
-        raise ValueError(f"fault {fault} needs the {' and '.join(missing)} sensor(s), which "
-                         f"system {spec.name} lacks (its sensors: "
-                         f"{', '.join(sorted(present)) or 'none'})")
+        raise ValueError(f"fault {fault} needs the {' and '.join(missing)} sensor(s) "
+                         f"feeding a consumer, which system {spec.name} lacks (sensor streams "
+                         f"it connects: {', '.join(sorted(present)) or 'none'})")
     truth = {name: source for name, source in TRUTH_SOURCES.items()
              if source.partition(".")[0] in names}
     lacking = [TRUTH_SOURCES[name] for name in scenario.truth if name not in truth]
