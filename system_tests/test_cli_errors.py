@@ -72,6 +72,12 @@ def cases(plant: Path, tmp: Path) -> dict[str, tuple[list[str], str]]:
                                    str(plant.parent)], "time offset 1000 s"),
         "no campaign": (["report", str(tmp / "nowhere")], "nowhere"),
         "no SSP for mc": (["mc", str(tmp / "nonexist.ssp")], "nonexist.ssp"),
+        "unknown fault": (run + ["--fault", "gremlins"], "unknown fault 'gremlins'; known: "
+                                                          "baro_step"),
+        "fault without its sensor": (run + ["--fault", "baro_step"],
+                                     "fault baro_step needs the baro sensor"),
+        "unknown fault for mc": (["mc", str(plant), "-n", "1", "--fault", "gremlins", "--out",
+                                  str(tmp / "mc")], "unknown fault 'gremlins'"),
     }
 
 
@@ -86,7 +92,7 @@ CASE_NAMES = [
     "NaN parameter", "infinite parameter", "hanging sub-step", "stop NaN", "stop negative",
     "stop off the grid", "unwritable out", "unknown command", "unknown reproduction",
     "missing log", "log not a ULog", "offset NaN", "offset beyond the log", "no campaign",
-    "no SSP for mc",
+    "no SSP for mc", "unknown fault", "fault without its sensor", "unknown fault for mc",
 ]
 
 

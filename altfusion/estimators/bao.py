@@ -52,6 +52,11 @@ Deviations from the paper:
   standard deviations of the jump (2 R_baro and ``max_vz``) is rejected.
 * Health (estimators/base.py): a baro that stays off for ``reset_timeout`` while the GPS
   agrees is isolated; with no height source fused for that long the estimate resets.
+* Held baro height (with ``fault_detection``): h_est is the last accepted baro height plus
+  the drift, so when no baro sample is accepted for longer than ``reset_timeout`` (a failed,
+  isolated or stopped barometer) the drift state must also carry the vehicle's motion since:
+  its variance grows as (``max_vz``·t)², t the time beyond the timeout (the motion bound of
+  the baro gate, counted as one standard deviation), and the GPS takes over the height.
 
 Scenarios of the paper (for the systems that will reproduce them):
 
@@ -160,7 +165,7 @@ class BaoDriftEstimator(Estimator):
         self.x = np.zeros(1)
         self.P = np.array([[p.P0_drift]])
         self.h_baro = float(self.baro_h)
-        self._baro_time = float(self.baro_time)
+        self._baro_time = self._baro_accepted = float(self.baro_time)
         self.h_baro_corrected = self.h_baro
         self.principle_error = 0.0
         self.wind_error = 0.0
@@ -171,8 +176,14 @@ class BaoDriftEstimator(Estimator):
         self._publish()
 
     def propagate(self, dt: float) -> None:
-        """Eq. (12): X(k+1) = X(k) + W(k), F = G = [1], Q = σ²·dt."""
-        self.x, self.P = predict(self.x, self.P, ONE, np.array([[self.params.drift_psd * dt]]))
+        """Eq. (12): X(k+1) = X(k) + W(k), F = G = [1], Q = σ²·dt; plus the motion of a
+        held baro height (module documentation, deviations)."""
+        p = self.params
+        Q = p.drift_psd * dt
+        if self.started and p.fault_detection:
+            stale = max(0.0, self.time - self._baro_accepted - p.reset_timeout)
+            Q += (p.max_vz * stale) ** 2 - (p.max_vz * max(0.0, stale - dt)) ** 2
+        self.x, self.P = predict(self.x, self.P, ONE, np.array([[Q]]))
         self._publish()
 
     def fuse(self, stream: Stream, sample: dict[str, float]) -> None:
@@ -193,7 +204,7 @@ class BaoDriftEstimator(Estimator):
             if not self.gate("baro", h_baro - self.h_baro,
                              self.jump_variance(p.R_baro, elapsed), p.gate_sigma):
                 return
-        self._baro_time = stamp
+        self._baro_time = self._baro_accepted = stamp
         H = self.h_est if self.started else h_baro       # "the altitude of the last time"
         self.principle_error = principle_error(H, p.H0, p.p0, p.T0, p.p0_actual, p.T0_actual,
                                                p.lapse_rate)

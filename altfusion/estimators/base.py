@@ -30,12 +30,18 @@ resets the speed the same way (PX4's velocity reset). A source whose samples sta
 ``reset_timeout`` while another source is fused is marked isolated in ``status`` until one of
 its samples passes the gate again.
 
+Bias test (with ``fault_detection``): a height source whose innovations average beyond the
+gate over the last ``reset_timeout`` (a step smaller than one sample's gate but persistent),
+and as far from those of another fused source that passes the same test, is rejected, and
+isolated after ``reset_timeout`` of it (:meth:`Estimator._biased`).
+
 Inputs outside any stream (``extra_inputs``, e.g. ``wind_speed``) have no count: they are read
 with :meth:`Estimator.held_input`, which holds the last finite value over non-finite ones.
 """
 
 import math
 from abc import abstractmethod
+from collections import deque
 from dataclasses import dataclass
 from enum import IntEnum, IntFlag
 from functools import cached_property
@@ -88,6 +94,52 @@ PLAUSIBLE_RANGE = {"acc_z": ("acc", 160.0), "gps_vz": ("gps_vz", 1000.0),
 full scale of common MEMS accelerometers; 1000 m/s, about Mach 3; ±100 km of height, the
 Kármán line. A value beyond its bound cannot be a measurement: the sample is rejected as
 that source's (test ratio value²/bound²) and takes no part in the step."""
+
+
+BIAS_MIN_SAMPLES = 5
+"""Fewest samples in a source's window before its bias test can reject it."""
+
+
+READMIT_SIGMAS = 2.0
+"""An isolated height source is re-admitted when the mean of its innovations over
+``reset_timeout`` lies within this many standard deviations of that mean (95 % of the time
+for a consistent source)."""
+
+MAX_WINDOW_VALUE = 1e100
+"""Innovations and variances entering a bias window are clipped to this magnitude, so that
+its running sums stay finite."""
+
+
+class InnovationWindow:
+    """A height source's innovations y and their variances S over a span of time, with
+    running sums: the mean ȳ = Σy/n and its variance ΣS/n² (independent samples)."""
+
+    def __init__(self) -> None:
+        self.samples: deque[tuple[float, float, float]] = deque()
+        self.sum_y = 0.0
+        self.sum_S = 0.0
+
+    @property
+    def n(self) -> int:
+        return len(self.samples)
+
+    def add(self, now: float, y: float, S: float, span: float) -> None:
+        """Add the sample (y, S) of time ``now`` and drop those older than ``span``."""
+        y = min(max(y, -MAX_WINDOW_VALUE), MAX_WINDOW_VALUE)
+        S = min(max(S, 0.0), MAX_WINDOW_VALUE)
+        self.samples.append((now, y, S))
+        self.sum_y += y
+        self.sum_S += S
+        while now - self.samples[0][0] > span:
+            _, old_y, old_S = self.samples.popleft()
+            self.sum_y -= old_y
+            self.sum_S -= old_S
+
+    def mean(self) -> float:
+        return self.sum_y / self.n
+
+    def mean_variance(self) -> float:
+        return max(self.sum_S, 0.0) / (self.n * self.n)
 
 
 class Status(IntFlag):
@@ -222,6 +274,8 @@ class Estimator(Component):
         self._last_aiding = -math.inf
         self._last_fused: dict[str, float] = {}
         self._gate_width: dict[str, float] = {}
+        self._innovations: dict[str, InnovationWindow] = {}
+        self._disagrees: dict[str, bool] = {}
         self._step_flags = Status(0)
         self._held_inputs: dict[str, float] = {}
         self._bad_inputs: set[str] = set()
@@ -361,7 +415,9 @@ class Estimator(Component):
         else:
             ratio = 0.0
         setattr(self, f"{source}_test_ratio", min(ratio, 1e300))
-        if ratio <= 1.0:
+        biased = bound is None and sigmas > 0.0 and self._biased(source, innovation,
+                                                                 variance, sigmas)
+        if ratio <= 1.0 and not biased:
             if bound is None and sigmas > 0.0:
                 self._gate_width[source] = sigmas * math.sqrt(max(variance, 0.0))
             self.accept(source, aids_height)
@@ -383,14 +439,62 @@ class Estimator(Component):
         setattr(self, f"{source}_rejected", getattr(self, f"{source}_rejected") + 1)
         self.n_rejected += 1
         self._mark(source, SourceBit.REJECTED)
-        if (now - since >= p.reset_timeout and self.contradicted(source, innovation)
+        if (now - since >= p.reset_timeout
+                and (biased or self.contradicted(source, innovation))
                 and not self._source_status & source_bit(source, SourceBit.ISOLATED)):
             self._source_status |= source_bit(source, SourceBit.ISOLATED)
             self.note(f"{source}: rejected for {now - since:.3g} s while other sources are "
                       f"fused: isolated until a sample passes the gate")
         self.note(f"{source}: sample rejected (innovation {innovation:.4g}, test ratio "
-                  f"{ratio:.3g})")
+                  f"{ratio:.3g}{', persistently biased' if biased else ''})")
         return False
+
+    def _biased(self, source: str, innovation: float, variance: float, sigmas: float) -> bool:
+        """The bias test of height source ``source`` (with ``fault_detection``): True if over
+        the last ``reset_timeout`` (at least :data:`BIAS_MIN_SAMPLES` samples) the mean ȳ of
+        its innovations is beyond ``sigmas`` standard deviations of that mean, √(S̄/n), and
+        beyond as many from the mean of another height source fused within
+        ``reset_timeout`` whose own mean passes the test: the source disagrees with a source
+        that agrees with the prediction.
+
+        A step smaller than the gate of one sample (a 100 m GNSS step under a 30 m noise)
+        passes every single-sample gate but not this one: for consistent white innovations
+        ȳ/√(S̄/n) is a standard normal variable, beyond 5 once in 1.7 million. A prediction
+        that lags every source alike (an overconfident filter in a climb) moves every mean
+        alike and isolates none. Every sample enters the window, fused or not, clipped to
+        the gate (one wild sample cannot bias the mean: it moves it by at most one gate
+        half-width over n). An isolated source stays rejected while its own mean lies beyond
+        :data:`READMIT_SIGMAS` standard deviations, whatever the other sources do (PX4: a GNSS
+        back 50 m off is not re-admitted; the margin keeps a 50 m offset under a 30 m noise
+        from slipping back in on a few low samples); it is re-admitted once its biased
+        samples have left the window."""
+        if not (self.params.fault_detection and source in HEIGHT_SOURCES):
+            return False
+        now, timeout = self.time, self.params.reset_timeout
+        window = self._innovations.setdefault(source, InnovationWindow())
+        half_width = sigmas * math.sqrt(max(variance, 0.0))
+        window.add(now, min(max(innovation, -half_width), half_width), variance, timeout)
+        mean, spread = window.mean(), math.sqrt(window.mean_variance())
+        if self._source_status & source_bit(source, SourceBit.ISOLATED):
+            biased = window.n >= BIAS_MIN_SAMPLES and abs(mean) > READMIT_SIGMAS * spread
+        else:
+            biased = window.n >= BIAS_MIN_SAMPLES and abs(mean) > sigmas * spread and any(
+                other != source and now - fused <= timeout
+                and self._agrees(other, sigmas, mean, spread)
+                for other, fused in self._last_fused.items())
+        self._disagrees[source] = biased
+        return biased
+
+    def _agrees(self, other: str, sigmas: float, mean: float, spread: float) -> bool:
+        """True if height source ``other``'s innovation mean passes the bias test and lies
+        more than ``sigmas`` combined standard deviations from ``mean`` (spread ``spread``);
+        a source never gated (no window) counts as agreeing, with mean 0 known exactly."""
+        window = self._innovations.get(other)
+        if window is None or window.n == 0:
+            return abs(mean) > sigmas * spread
+        other_mean, other_variance = window.mean(), window.mean_variance()
+        return (abs(other_mean) <= sigmas * math.sqrt(other_variance)
+                and abs(mean - other_mean) > sigmas * math.sqrt(spread**2 + other_variance))
 
     def jump_variance(self, noise_variance: float, elapsed: float) -> float:
         """Variance of a height's jump from its last accepted sample, ``elapsed`` s after the
@@ -412,12 +516,15 @@ class Estimator(Component):
     def contradicted(self, source: str, innovation: float) -> bool:
         """True if another height source, fused within ``reset_timeout`` and passing its
         own gate since, pins the height tighter than ``innovation`` (its gate half-width
-        ``gate_sigma``·√S, with S its last innovation variance): then a sample of ``source``
-        that far from the prediction is the faulty one (with ``fault_detection``; else
-        False). A source too coarse to tell (a 3 m GPS against a 2 m terrain step under the
-        laser) contradicts nothing."""
+        ``gate_sigma``·√S, with S its last innovation variance), or if ``source`` failed its
+        last bias test (:meth:`_biased`: persistently off while another source agrees): then
+        a sample of ``source`` that far from the prediction is the faulty one (with
+        ``fault_detection``; else False). A source too coarse to tell (a 3 m GPS against a
+        2 m terrain step under the laser) contradicts nothing."""
         if not (self.params.fault_detection and source in HEIGHT_SOURCES):
             return False
+        if self._disagrees.get(source, False):
+            return True
         now, timeout = self.time, self.params.reset_timeout
         return any(other != source and now - fused <= timeout
                    and abs(innovation) > self._gate_width.get(other, math.inf)

@@ -1,0 +1,179 @@
+"""The fault suite (docs/faults.md) on the catalog's ``fault_flight`` through the FMUs.
+
+Every estimator flies side by side in one simulation per scenario (15 runs of one reused
+Simulation: the nominal flight, scenario ``none``, and the 14 faults, same seeds), so each
+estimator x scenario cell below reads the same runs. The pass criteria are the spec's:
+
+* no NaN, no discard, no crash: the run completes (a discarding or crashing FMU ends it with
+  RunFailedError) and every recorded output of every estimator is finite;
+* a faulty source (``FaultScenario.faulty``) that the estimator reads is isolated (its
+  ISOLATED status bit) within 10 s of the fault's start;
+* after the transient (the fault's own duration, 10 s to isolate and 30 s to recover: the
+  scenario's ``transient``) the error is back within 3x its nominal RMS, or ``h_valid`` is
+  false. Both RMS are taken over the same window, [start + transient, 300 s), of the faulty
+  and the nominal run, over the samples the estimator declares valid. With identical seeds a
+  recovered estimator's window RMS equals the nominal one up to the fault's residue, so the
+  factor 3 (the spec's) leaves room only for a residue of 2.8x the nominal RMS;
+* ``silent``: ``h_valid`` false at the aiding timeout (5 s) plus one recording interval after
+  every sensor stopped;
+* the coverage of |e| <= 2 h_std lies between 85 % and 99.5 % (the spec's band around the
+  95.4 % of an honest Gaussian h_std) in the nominal flight, over its 3000 samples at 0.1 s
+  (correlated, so the band is the spec's, not a binomial interval).
+
+Cells that fail today are listed in KNOWN_FAILURES with the reason, marked xfail(strict):
+the test fails as soon as one of them passes, so the list cannot go stale.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from altfusion import scores
+from altfusion.cosim.runner import RunFailedError, Simulation
+from altfusion.replay.system import CATALOG_ESTIMATORS
+from altfusion.systems.faults import FAULTS, fault_flight, fault_parameters, with_fault
+
+ESTIMATORS = tuple(CATALOG_ESTIMATORS)
+ISOLATION_DEADLINE = 10.0
+AIDING_TIMEOUT = 5.0
+RECORD_INTERVAL = 0.1
+
+WHANG_BARO = ("WhangGAEstimator's barometer is ungated by design (its paper's weather steps "
+              "the baro height by up to ~100 m between samples, which its bias random walk "
+              "follows): a failed barometer is followed as a bias, never isolated")
+WHANG_GNSS = ("WhangGAEstimator's GNSS calibrates the baro bias, whose random walk (its "
+              "paper's Q_b = 400 m² per air-data step) absorbs a step within a few samples: "
+              "no persistent innovation to isolate; the height follows the GNSS")
+HAJIYEV_GNSS = ("HajiyevAdaptiveEstimator gates the GNSS on the jump of its residual from the "
+                "last accepted one (its adaptation must follow the baro drift): the first "
+                "sample after a step inside the 4-sigma jump gate becomes the reference, so the "
+                "step leaves no persistent innovation; the height follows the GNSS")
+REFERENCE_GNSS = ("the estimator takes the GNSS as its height reference (a baro bias state "
+                  "absorbs the rest): GNSS +10 m is a 10 m height error, beyond 3x the nominal "
+                  "RMS (PX4 with GNSS as reference does the same)")
+YANG_WEIGHTS = ("YangFusionKF's optimal weighting (eqs. 7-8) has no baro-bias state: a baro "
+                "error of 5-10 m moves the fused height by the baro's weight 0.18, beyond 3x "
+                "the filter's 0.2 m nominal RMS")
+
+KNOWN_FAILURES: dict[tuple[str, str, str], str] = {
+    ("isolation", "baro_step", "WhangGAEstimator"): WHANG_BARO,
+    ("isolation", "gnss_step", "WhangGAEstimator"): WHANG_GNSS,
+    ("isolation", "gnss_outage_return_off", "WhangGAEstimator"): WHANG_GNSS,
+    ("isolation", "gnss_step", "HajiyevAdaptiveEstimator"): HAJIYEV_GNSS,
+    ("isolation", "gnss_outage_return_off", "HajiyevAdaptiveEstimator"): HAJIYEV_GNSS,
+    ("recovery", "gnss_step", "WhangGAEstimator"): WHANG_GNSS,
+    ("recovery", "gnss_outage_return_off", "WhangGAEstimator"): WHANG_GNSS,
+    ("recovery", "gnss_step", "HajiyevAdaptiveEstimator"): HAJIYEV_GNSS,
+    ("recovery", "baro_step", "XuSHAEKF"): (
+        "with its barometer isolated above the laser's 25 m, XuSHAEKF has the 30 m GNSS and "
+        "the accelerometer only: 5.4 m RMS against 1.0 m nominal"),
+    ("recovery", "all_fail", "BaselineKF"): REFERENCE_GNSS,
+    ("recovery", "all_fail", "XuSHAEKF"): REFERENCE_GNSS,
+    ("recovery", "all_fail", "YangFusionKF"): YANG_WEIGHTS,
+    ("recovery", "baro_drift", "YangFusionKF"): YANG_WEIGHTS,
+    ("recovery", "acc_bias", "YangFusionKF"): (
+        "YangFusionKF has no accelerometer-bias state: the acceleration measurement "
+        "(R_acc = 1e-4 m²/s⁴) makes height and speed overconfident (h_std 0.55 m) and a "
+        "0.1-0.4 m/s² bias drifts the height by about 30 m while every height sample still "
+        "passes its wide gate"),
+}
+"""(criterion, fault, estimator) -> why the cell fails today (docs/faults.md, "Results")."""
+
+
+@pytest.fixture(scope="module")
+def suite(fmus):
+    """Results of the nominal flight ('none') and of every fault, by scenario name: (results,
+    failure message or None)."""
+    spec = with_fault(fault_flight(ESTIMATORS), next(iter(FAULTS)))
+    runs = {}
+    with Simulation(spec, fmus) as simulation:
+        for fault in ("none", *FAULTS):
+            parameters = {f"fault.{k}": v for k, v in fault_parameters(fault).items()}
+            try:
+                runs[fault] = (simulation.run(parameters=parameters), None)
+            except RunFailedError as error:
+                runs[fault] = (error.results, str(error))
+    return runs
+
+
+def known(request, criterion: str, fault: str, estimator: str) -> None:
+    reason = KNOWN_FAILURES.get((criterion, fault, estimator))
+    if reason:
+        request.applymarker(pytest.mark.xfail(strict=True, reason=reason))
+
+
+def error(results, estimator: str) -> np.ndarray:
+    return results[f"{estimator}.h_est"] - results["plant.h"]
+
+
+@pytest.mark.parametrize("fault", ("none", *FAULTS))
+def test_run_completes_and_every_estimator_output_is_finite(suite, fault):
+    results, failure = suite[fault]
+    assert failure is None
+    bad = [name for name, values in results.columns.items() if not np.isfinite(values).all()]
+    assert bad == []
+
+
+@pytest.mark.parametrize("estimator", ESTIMATORS)
+@pytest.mark.parametrize("fault", [name for name, f in FAULTS.items() if f.faulty])
+def test_faulty_source_is_isolated_within_10_s(suite, request, fault, estimator):
+    scenario = FAULTS[fault]
+    sources = [s for s in scenario.faulty if s in CATALOG_ESTIMATORS[estimator].sources()]
+    if not sources:
+        pytest.skip(f"{estimator} does not read {scenario.faulty}")
+    known(request, "isolation", fault, estimator)
+    results, _ = suite[fault]
+    for source in sources:
+        elapsed = scores.isolation_time(results.time, results[f"{estimator}.status"], source,
+                                        scenario.start)
+        assert elapsed is not None and elapsed <= ISOLATION_DEADLINE, (source, elapsed)
+
+
+@pytest.mark.parametrize("estimator", ESTIMATORS)
+@pytest.mark.parametrize("fault", FAULTS)
+def test_error_returns_within_3x_nominal_rms_or_output_invalid(suite, request, fault,
+                                                                estimator):
+    known(request, "recovery", fault, estimator)
+    scenario = FAULTS[fault]
+    results, _ = suite[fault]
+    nominal, _ = suite["none"]
+    passed, faulty_rms, nominal_rms = scores.recovered(
+        results.time, error(results, estimator), results[f"{estimator}.h_valid"],
+        error(nominal, estimator), nominal[f"{estimator}.h_valid"],
+        scenario.start + scenario.transient)
+    assert passed, f"RMS {faulty_rms:.3g} m > 3 x nominal {nominal_rms:.3g} m"
+
+
+@pytest.mark.parametrize("estimator", ESTIMATORS)
+def test_silent_sensors_make_the_output_invalid_within_the_aiding_timeout(suite, estimator):
+    results, _ = suite["silent"]
+    start = FAULTS["silent"].start
+    after = results.time >= start + AIDING_TIMEOUT + RECORD_INTERVAL + 1e-9
+    assert results[f"{estimator}.h_valid"][after].max() == 0
+
+
+@pytest.mark.parametrize("estimator", ESTIMATORS)
+def test_nominal_coverage_of_two_h_std_is_honest(suite, request, estimator):
+    known(request, "coverage", "none", estimator)
+    results, _ = suite["none"]
+    covered = scores.coverage(results.time, error(results, estimator),
+                              results[f"{estimator}.h_std"], results[f"{estimator}.h_valid"])
+    low, high = scores.HONEST_COVERAGE
+    assert not math.isnan(covered) and low <= covered <= high, covered
+
+
+def test_cli_run_applies_a_fault_to_any_system(ssp_files, tmp_path, capsys):
+    """``altfusion run SSP --fault NAME``: the SensorFaults FMU found next to the SSP, the
+    system renamed, its parameters settable with --set."""
+    from altfusion.cli import main
+    from altfusion.cosim.results import Results
+
+    status = main(["run", str(ssp_files["yang2020"]), "--fault", "baro_step",
+                   "--set", "fault.fault_start=0.5", "--stop", "1", "--out", str(tmp_path)])
+    out = capsys.readouterr().out
+    assert status == 0
+    assert out.startswith("yang2020+baro_step: ")
+    results = Results.from_csv(tmp_path / "yang2020+baro_step.csv")
+    active = results["fault.fault_active"]
+    assert active[results.time < 0.5].max() == 0 and active[-1] == 1
