@@ -15,7 +15,7 @@ from altfusion.systems.xu2016 import (
     xu2016_multipoint,
     xu2016_multipoint_wind,
 )
-from altfusion.systems.yang2020 import yang2020, yang2020_baseline
+from altfusion.systems.yang2020 import yang2020, yang2020_altitude_ekf, yang2020_baseline
 
 
 def plant_yang2020() -> SystemSpec:
@@ -69,6 +69,7 @@ SYSTEMS: dict[str, Callable[[], SystemSpec]] = {
     "hajiyev_drift": hajiyev_drift,
     "yang2020": yang2020,
     "yang2020_baseline": yang2020_baseline,
+    "yang2020_altitude_ekf": yang2020_altitude_ekf,
     "bao2017": bao2017,
     "xu2016_hover15": xu2016_hover15,
     "xu2016_hover35": xu2016_hover35,

@@ -13,10 +13,12 @@ radio altimeter (200 ms), which are stepped at their sample periods. Signals are
 every 0.1 s.
 
 ``yang2020_baseline`` is the same loop flown on BaselineKF (baro and GPS only, seed 003's
-variances); the same run of a campaign gives both systems identical weather and sensor noise.
+variances), ``yang2020_altitude_ekf`` on AltitudeEKF (every sensor, seed 003's noises); the
+same run of a campaign gives these systems identical weather and sensor noise.
 """
 
 from altfusion.cosim.system import ComponentSpec, Metric, SystemSpec
+from altfusion.estimators.altitude_ekf import AltitudeEKF
 from altfusion.estimators.baseline import BaselineKF
 from altfusion.estimators.yang import YangFusionKF
 from altfusion.systems.plant import plant_components, plant_connections
@@ -30,6 +32,10 @@ SENSOR_STEPS = {"gnss": 0.1, "radar": 0.2}
 
 BASELINE = {"R_baro": 400.0, "R_gps": 900.0}
 """BaselineKF given seed 003's baro and GPS variances (20 m and 30 m)."""
+
+ALTITUDE_EKF = {"baro_noise": 20.0, "gps_noise": 30.0, "gps_vz_noise": 0.2, "acc_noise": 0.01,
+                "radar_noise": 10.0}
+"""AltitudeEKF given seed 003's sensor noises (Section 4.2) by their contract names."""
 
 RECORD = ("plant.h", "plant.vz", "plant.az", "controller.h_ref", "controller.thrust",
           "air_data.baro_h", "gnss.gps_h", "gnss.gps_vz", "radar.radar_h",
@@ -78,4 +84,17 @@ def yang2020_baseline() -> SystemSpec:
         "Seed 003's scenario (see yang2020) flown closed loop on BaselineKF (baro 20 m, "
         "GPS 30 m)",
         BaselineKF, BASELINE,
+    )
+
+
+def yang2020_altitude_ekf() -> SystemSpec:
+    """The loop of :func:`yang2020` flown on AltitudeEKF (every sensor, seed 003's noises)."""
+    return _closed_loop(
+        "yang2020_altitude_ekf",
+        "Seed 003's scenario (see yang2020) flown closed loop on AltitudeEKF with seed 003's "
+        "sensor noises (baro 20 m, GPS 30 m / 0.2 m/s, radio altimeter 10 m, accelerometer "
+        "0.01 m/s²)",
+        AltitudeEKF, ALTITUDE_EKF,
+        ("estimator.acc_bias", "estimator.baro_bias", "estimator.terrain_h",
+         "estimator.n_rejected", "estimator.h_valid"),
     )

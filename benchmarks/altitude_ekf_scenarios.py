@@ -1,0 +1,99 @@
+"""AltitudeEKF beside each paper's estimator in the paper's own scenario (issue 16's targets).
+
+Each paper system of the catalog gets AltitudeEKF as an observer component ``ekf`` (wired to
+the same sensor outputs with ``systems.wiring.estimator_connections``, given the scenario's
+sensor noises by their contract names, stepped with the paper's estimator; in the closed
+loops the aircraft still flies on the paper's estimate). Both estimators see the same seeded
+sensor samples. Printed per scenario: the height RMS error of the paper's estimator and of
+AltitudeEKF over all runs, and AltitudeEKF's coverage, the share of samples with
+|e| <= 2 h_std after the first ``SETTLE`` seconds (target 85-99.5 %).
+
+Run by hand (models/ built): ``python benchmarks/altitude_ekf_scenarios.py [RUNS]``;
+the core backend steps the components in-process (same numbers as the FMUs, faster).
+"""
+
+import sys
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from altfusion.cosim import Simulation
+from altfusion.cosim.system import ComponentSpec
+from altfusion.estimators.altitude_ekf import AltitudeEKF
+from altfusion.systems import build_system
+from altfusion.systems.wiring import estimator_connections
+
+MODELS = Path(__file__).resolve().parent.parent / "models"
+SETTLE = 10.0
+"""Seconds after the start left out of the coverage (the filter's start transient)."""
+
+SCENARIOS = {
+    # system: (truth column, AltitudeEKF parameters: the scenario's sensor noises)
+    "whang2008": ("plant.h", {"baro_noise": 5.0, "gps_noise": 70.0, "baro_scale_psd": 4e-6,
+                              "baro_bias_psd": 1.0}),
+    "bao2017": ("plant.h", {"baro_noise": 0.1, "gps_noise": 2.0, "baro_bias_psd": 0.03}),
+    "hajiyev": ("truth.gps_h", {"baro_noise": 9.0, "gps_noise": 13.0}),
+    "hajiyev_drift": ("truth.gps_h", {"baro_noise": 9.0, "gps_noise": 13.0,
+                                      "baro_bias_psd": 1.0, "baro_scale_psd": 1e-6}),
+    "yang2020": ("plant.h", {"baro_noise": 20.0, "gps_noise": 30.0, "gps_vz_noise": 0.2,
+                             "acc_noise": 0.01, "radar_noise": 10.0}),
+    "xu2016_hover15": ("plant.h", {"baro_noise": 0.5, "gps_noise": 2.0, "acc_noise": 0.05,
+                                   "laser_noise": 0.005}),
+    "xu2016_hover35": ("plant.h", {"baro_noise": 0.5, "gps_noise": 2.0, "acc_noise": 0.05,
+                                   "laser_noise": 0.005}),
+    "xu2016_multipoint": ("plant.h", {"baro_noise": 0.5, "gps_noise": 2.0,
+                                      "acc_noise": 0.05, "laser_noise": 0.005}),
+    "xu2016_multipoint_wind": ("plant.h", {"baro_noise": 0.5, "gps_noise": 2.0,
+                                           "acc_noise": 0.05, "laser_noise": 0.005}),
+}
+
+SEEDED = ("air_data", "gnss", "accelerometer", "radar", "laser", "atmosphere")
+
+
+def with_observer(name: str, parameters: dict):
+    """The catalog system ``name`` with AltitudeEKF as observer component ``ekf``."""
+    system = build_system(name)
+    step = next(c.step_size for c in system.components if c.name == "estimator")
+    present = {c.name for c in system.components}
+    wiring = tuple(c for c in estimator_connections(AltitudeEKF, "ekf")
+                   if c.start.partition(".")[0] in present)
+    return replace(system, components=system.components + (
+        ComponentSpec("ekf", "AltitudeEKF", step, parameters),),
+        connections=system.connections + wiring,
+        record=tuple(dict.fromkeys(system.record + ("estimator.h_est", "ekf.h_est",
+                                                    "ekf.h_std"))))
+
+
+def run(name: str, runs: int) -> tuple[float, float, float]:
+    truth, parameters = SCENARIOS[name]
+    system = with_observer(name, parameters)
+    fmus = {c.fmu: MODELS / f"{c.fmu}.fmu" for c in system.components}
+    present = {c.name for c in system.components}
+    paper, ekf, covered = [], [], []
+    with Simulation(system, fmus, backend="core") as sim:
+        for i in range(runs):
+            seeds = {f"{c}.seed": 1000 * (i + 1) + k for k, c in enumerate(SEEDED)
+                     if c in present}
+            r = sim.run(parameters=seeds)
+            keep = r.time >= SETTLE
+            t_true = r[truth]
+            paper.append((r["estimator.h_est"] - t_true)[keep])
+            e = (r["ekf.h_est"] - t_true)[keep]
+            ekf.append(e)
+            covered.append(np.abs(e) <= 2.0 * r["ekf.h_std"][keep])
+    rms = [float(np.sqrt(np.mean(np.concatenate(x) ** 2))) for x in (paper, ekf)]
+    return rms[0], rms[1], float(np.mean(np.concatenate(covered)))
+
+
+def main() -> None:
+    runs = int(sys.argv[1]) if len(sys.argv) > 1 else 3
+    names = sys.argv[2:] or list(SCENARIOS)
+    print(f"{'scenario':26s} {'paper RMS m':>12s} {'AltitudeEKF RMS m':>18s} {'coverage':>9s}")
+    for name in names:
+        paper, ekf, coverage = run(name, runs)
+        print(f"{name:26s} {paper:12.4g} {ekf:18.4g} {100 * coverage:8.1f}%", flush=True)
+
+
+if __name__ == "__main__":
+    main()
