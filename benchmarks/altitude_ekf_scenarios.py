@@ -23,10 +23,14 @@ from altfusion.cosim.system import ComponentSpec
 from altfusion.estimators.altitude_ekf import AltitudeEKF
 from altfusion.systems import build_system
 from altfusion.systems.wiring import estimator_connections
+from altfusion.systems.yang2020 import ALTITUDE_EKF
 
 MODELS = Path(__file__).resolve().parent.parent / "models"
 SETTLE = 10.0
 """Seconds after the start left out of the coverage (the filter's start transient)."""
+
+XU_TERRAIN = {"laser_noise": 0.005, "P0_terrain": 1e-4, "terrain_psd": 1e-8}
+"""Seed 004's laser over flat terrain at 0 m, known (as XuSHAEKF assumes)."""
 
 SCENARIOS = {
     # system: (truth column, AltitudeEKF parameters: the scenario's sensor noises)
@@ -36,16 +40,15 @@ SCENARIOS = {
     "hajiyev": ("truth.gps_h", {"baro_noise": 9.0, "gps_noise": 13.0}),
     "hajiyev_drift": ("truth.gps_h", {"baro_noise": 9.0, "gps_noise": 13.0,
                                       "baro_bias_psd": 1.0, "baro_scale_psd": 1e-6}),
-    "yang2020": ("plant.h", {"baro_noise": 20.0, "gps_noise": 30.0, "gps_vz_noise": 0.2,
-                             "acc_noise": 0.01, "radar_noise": 10.0}),
+    "yang2020": ("plant.h", ALTITUDE_EKF),
     "xu2016_hover15": ("plant.h", {"baro_noise": 0.5, "gps_noise": 2.0, "acc_noise": 0.05,
-                                   "laser_noise": 0.005}),
+                                   **XU_TERRAIN}),
     "xu2016_hover35": ("plant.h", {"baro_noise": 0.5, "gps_noise": 2.0, "acc_noise": 0.05,
-                                   "laser_noise": 0.005}),
+                                   **XU_TERRAIN}),
     "xu2016_multipoint": ("plant.h", {"baro_noise": 0.5, "gps_noise": 2.0,
-                                      "acc_noise": 0.05, "laser_noise": 0.005}),
+                                      "acc_noise": 0.05, **XU_TERRAIN}),
     "xu2016_multipoint_wind": ("plant.h", {"baro_noise": 0.5, "gps_noise": 2.0,
-                                           "acc_noise": 0.05, "laser_noise": 0.005}),
+                                           "acc_noise": 0.05, **XU_TERRAIN}),
 }
 
 SEEDED = ("air_data", "gnss", "accelerometer", "radar", "laser", "atmosphere")

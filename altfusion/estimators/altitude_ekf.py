@@ -49,7 +49,16 @@ import math
 from dataclasses import dataclass
 
 from altfusion.errors import ParameterError
-from altfusion.estimators.base import ACC, BARO_ALL, GPS_ALL, LASER, RADAR, Estimator, HealthParams
+from altfusion.estimators.base import (
+    ACC,
+    BARO_ALL,
+    GPS_ALL,
+    LASER,
+    RADAR,
+    Estimator,
+    HealthParams,
+    Status,
+)
 from altfusion.estimators.kalman import update_scalar
 from altfusion.params import param
 
@@ -123,6 +132,8 @@ class AltitudeEKFParams(HealthParams):
                             min=0.0)
     P0_terrain: float = param(100.0, "m2", "Variance of the terrain height before the first "
                                            "range sample", positive=True)
+    terrain_h0: float = param(0.0, "m", "Terrain height before the first range sample (its "
+                                        "prior, of variance P0_terrain)")
 
 
 class AltitudeEKF(Estimator):
@@ -139,7 +150,7 @@ class AltitudeEKF(Estimator):
 
     def initialize_filter(self) -> None:
         p = self.params
-        self.x = [0.0] * 6
+        self.x = [0.0, 0.0, 0.0, 0.0, 0.0, p.terrain_h0]
         self.P = [[0.0] * 6 for _ in range(6)]
         for i, var in ((V, p.P0_vz), (BA, p.P0_acc_bias), (D, p.P0_offset),
                        (K, 0.0 if p.height_ref == "baro" else p.P0_scale),
@@ -156,6 +167,9 @@ class AltitudeEKF(Estimator):
         self._range_on = {"radar": True, "laser": True}
         self._range_rejected_since: dict[str, float] = {}
         self._nis = {}
+        self._reference = "baro" if p.height_ref == "baro" else "gps"
+        self._reference_rejected_since: float | None = None
+        self._reference_sample = (0.0, 0.0, 1.0)       # its last rejected (z, stamp, σ)
         self.n_terrain_resets = 0
         self._publish()
 
@@ -281,9 +295,18 @@ class AltitudeEKF(Estimator):
         S = sum(c * sum(c2 * self.P[i][j] for j, c2 in row) for i, c in row) + R
         if source in ("radar", "laser") and self._terrain_step(source, z, y, S):
             return
+        if source == self._reference:
+            if self._reference_step(source, y, S):
+                return
+            self._reference_sample = (z, stamp, sigma)
+        elif self._reference_first(y, S):
+            self._fuse_height(source, z, stamp, sigma)     # sets its offset anew
+            return
         if not self.gate(source, y, S, self.params.gate_sigma):
             return
         self._range_rejected_since.pop(source, None)
+        if source == self._reference:
+            self._reference_rejected_since = None
         self._adapt(source, y * y / S)
         self.x, self.P, _ = update_scalar(self.x, self.P, row, y, R)
 
@@ -330,6 +353,53 @@ class AltitudeEKF(Estimator):
         self.accept(source)
         return True
 
+    def _reference_step(self, source: str, y: float, S: float) -> bool:
+        """PX4's reset to the height reference: the reference source, fused until its
+        samples jumped, rejected for ``reset_timeout``, takes the height with it (the other
+        sources' offsets are learnt anew). A reference returning inconsistent after an outage
+        (not fused for ``reset_timeout`` before its first rejection) is not re-admitted: it
+        stays rejected and, contradicted by the sources that carried the height, isolated.
+        True if the height was reset."""
+        p = self.params
+        if not p.fault_detection or p.gate_sigma <= 0.0 or y * y <= p.gate_sigma**2 * S:
+            return False
+        now = self.time
+        if self._reference_rejected_since is None:
+            in_use = now - self._last_fused.get(source, -math.inf) <= p.reset_timeout
+            self._reference_rejected_since = now if in_use else math.inf
+        if now - self._reference_rejected_since < p.reset_timeout:
+            return False
+        self._reset_to_reference(y, S)
+        return True
+
+    def _reference_first(self, y: float, S: float) -> bool:
+        """With every height source rejected for ``reset_timeout`` (the base's height reset)
+        while the reference delivers, the height resets onto the reference's last sample,
+        not onto whichever source comes first (PX4 *AllHgtFailReset). True if it did."""
+        p = self.params
+        since = self._reference_rejected_since
+        if not (p.fault_detection and since is not None and math.isfinite(since)
+                and self.time - self._last_aiding >= p.reset_timeout
+                and y * y > p.gate_sigma**2 * S):
+            return False
+        z, stamp, sigma = self._reference_sample
+        h_s, _, row_h, _ = self._back(stamp)
+        predicted, row = self._model(self._reference, h_s, row_h)
+        S_ref = sum(c * sum(c2 * self.P[i][j] for j, c2 in row) for i, c in row) + sigma**2
+        self._reset_to_reference(z - predicted, S_ref)
+        return True
+
+    def _reset_to_reference(self, y: float, S: float) -> None:
+        source = self._reference
+        self._reference_rejected_since = None
+        self.reset_height(source, y, S)
+        self.n_height_resets += 1
+        self._step_flags |= Status.HEIGHT_RESET
+        self.note(f"{source}: the height reference rejected for "
+                  f"{self.params.reset_timeout:g} s; height reset by {y:.4g} m to it "
+                  f"(reset {self.n_height_resets})")
+        self.accept(source)
+
     def _adaptation(self, source: str) -> float:
         """The factor on R of seed 004's bounded innovation-based adaptation (1: off)."""
         if not self.params.adaptive_noise:
@@ -367,8 +437,11 @@ class AltitudeEKF(Estimator):
         self.accept(source)
 
     def _first_sample(self, source: str, z: float, sigma: float) -> bool:
-        """The first sample of the source of d, or of a rangefinder, sets its offset state
-        (d = z - h or t = h - z, uncorrelated, Var = Var h + R) and is consumed."""
+        """The first sample of the source of d, or of a rangefinder, that disagrees with the
+        state's prior (``P0_offset``, ``P0_terrain``: beyond the gate) sets its offset state
+        (d = z - h or t = h - z, uncorrelated, Var = Var h + R) and is consumed; one that
+        agrees is fused as any sample (a calibrated baro, a known terrain). True if
+        consumed."""
         is_offset = (source == "baro") != (self.params.height_ref == "baro") \
             and source in ("baro", "gps")
         if is_offset and not self._offset_known:
@@ -379,6 +452,10 @@ class AltitudeEKF(Estimator):
             self._terrain_known = True
         else:
             return False
+        sigmas = self.params.gate_sigma
+        y = value - self.x[index]                         # against the state's prior
+        if y * y <= sigmas * sigmas * (self.P[index][index] + self.P[H][H] + sigma * sigma):
+            return False                                  # consistent: fused as any sample
         self.x[index] = value
         for j in range(6):
             self.P[index][j] = self.P[j][index] = 0.0
@@ -388,12 +465,18 @@ class AltitudeEKF(Estimator):
 
     def reset_height(self, source: str, innovation: float, variance: float) -> None:
         """Height (or, for the GNSS speed, the speed) onto the sample; its variance the
-        innovation's, its correlations zero (PX4's height and velocity resets)."""
+        innovation's, its correlations zero (PX4's height and velocity resets). After a
+        height reset the offset d and the terrain are set anew by their sources' next
+        samples, unless the reset was onto that source."""
         i = V if source == "gps_vz" else H
         self.x[i] += innovation
         for j in range(6):
             self.P[i][j] = self.P[j][i] = 0.0
         self.P[i][i] = variance
+        if i == H:                        # the other sources' offsets: learnt anew
+            owner = "gps" if self.params.height_ref == "baro" else "baro"
+            self._offset_known = self._offset_known and source == owner
+            self._terrain_known = self._terrain_known and source in ("radar", "laser")
         self._publish()
 
     def _publish(self) -> None:
