@@ -59,8 +59,7 @@ def with_observer(name: str, parameters: dict):
     system = build_system(name)
     step = next(c.step_size for c in system.components if c.name == "estimator")
     present = {c.name for c in system.components}
-    wiring = tuple(c for c in estimator_connections(AltitudeEKF, "ekf")
-                   if c.start.partition(".")[0] in present)
+    wiring = estimator_connections(AltitudeEKF, "ekf", sensors=tuple(present))
     return replace(system, components=system.components + (
         ComponentSpec("ekf", "AltitudeEKF", step, parameters),),
         connections=system.connections + wiring,

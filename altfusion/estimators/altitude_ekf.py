@@ -75,8 +75,8 @@ class AltitudeEKFParams(HealthParams):
                                        "1σ (the user range error)", positive=True)
     gps_vz_noise: float = param(0.5, "m/s", "GNSS vertical-speed noise, 1σ (PX4 "
                                             "EKF2_GPS_V_NOISE)", positive=True)
-    acc_noise: float = param(0.35, "m/s2", "Accelerometer noise per sample at the "
-                                           "estimator's step, 1σ (PX4 EKF2_ACC_NOISE)",
+    acc_noise: float = param(0.35, "m/s2", "Accelerometer noise per sample, 1σ (PX4 "
+                                           "EKF2_ACC_NOISE)",
                              positive=True)
     radar_noise: float = param(1.0, "m", "Radio-altimeter noise, 1σ", positive=True)
     laser_noise: float = param(0.1, "m", "Laser-rangefinder noise, 1σ (PX4 EKF2_RNG_NOISE)",
@@ -162,6 +162,7 @@ class AltitudeEKF(Estimator):
         self.h_c = 0.0
         self._acc = None                  # (stamp, value) of the last accelerometer sample
         self._acc_used = False
+        self._acc_period = 0.0            # between the last two accelerometer samples
         self._offset_known = False        # d set by its source's first sample
         self._terrain_known = False
         self._range_on = {"radar": True, "laser": True}
@@ -185,6 +186,8 @@ class AltitudeEKF(Estimator):
         previous = self._acc
         if acc_sample is not None:
             self._acc = (acc_sample["acc_time"], acc_sample["acc_z"])
+            if previous is not None and self._acc[0] > previous[0]:
+                self._acc_period = min(self._acc[0] - previous[0], p.acc_timeout)
         acc_on = self._acc is not None and now - self._acc[0] <= p.acc_timeout
         if acc_on and acc_sample is not None and previous is not None \
                 and now - previous[0] <= p.acc_timeout:
@@ -203,7 +206,7 @@ class AltitudeEKF(Estimator):
         P[V] = [p1 - e * p2 for p1, p2 in zip(P[V], P[BA], strict=True)]
         for row in P:
             row[H], row[V] = row[H] + dt * row[V] - c * row[BA], row[V] - e * row[BA]
-        q = p.acc_noise**2 * dt if acc_on else p.accel_psd
+        q = p.acc_noise**2 * max(dt, self._acc_period) if acc_on else p.accel_psd
         P[H][H] += q * dt**3 / 3.0
         P[H][V] += q * dt**2 / 2.0
         P[V][V] += q * dt

@@ -27,6 +27,9 @@ replay runs them with noises from the logged sensors instead:
   as BaselineKF's); with the paper's 39.69 m²/s² the rate state follows the baro noise
   (±4 m/s) and coasts 4 m through the Auterion log's 2.2 s air-data gap.
 
+AltitudeEKF takes the same GPS and baro σ (the GPS σ from epv, so not scaled by VDOP), the
+baro offset prior and the vibration-dominated accelerometer noise as its ``acc_noise``.
+
 Hajiyev's filter has no bias state: its adaptive factor (eq. 30) sees the 155 m residual and
 turns the gain to ~1, so it follows GPS and the baro only interpolates between GPS samples.
 Estimators not listed run with their defaults.
@@ -39,6 +42,7 @@ import numpy as np
 
 from altfusion.constants import ISA_T0
 from altfusion.cosim.system import ComponentSpec, Connection, SystemSpec
+from altfusion.estimators.altitude_ekf import AltitudeEKF
 from altfusion.estimators.bao import BaoDriftEstimator
 from altfusion.estimators.baseline import BaselineKF
 from altfusion.estimators.hajiyev import HajiyevAdaptiveEstimator
@@ -74,6 +78,8 @@ REPLAY_TUNING: dict[str, dict[str, Any]] = {
                      "R_gps_vz": 0.2**2, "R_acc": ACC_VIBRATION_SIGMA**2},
     "XuSHAEKF": {"R_gps": GPS_SIGMA**2, "R_baro": BARO_SIGMA**2,
                  "baro_bias_std": BARO_OFFSET_SIGMA, "acc_noise_std": ACC_VIBRATION_SIGMA},
+    "AltitudeEKF": {"gps_noise": GPS_SIGMA, "gps_dop_scaling": False, "baro_noise": BARO_SIGMA,
+                    "P0_offset": BARO_OFFSET_SIGMA**2, "acc_noise": ACC_VIBRATION_SIGMA},
 }
 """Parameters of each estimator for replayed PX4 logs (see the module docstring)."""
 
@@ -84,6 +90,7 @@ CATALOG_ESTIMATORS = {
     "BaoDriftEstimator": BaoDriftEstimator,
     "YangFusionKF": YangFusionKF,
     "XuSHAEKF": XuSHAEKF,
+    "AltitudeEKF": AltitudeEKF,
 }
 """The estimators of the catalog replay systems, by FMU model name."""
 

@@ -62,7 +62,8 @@ def _closed_loop(name: str, description: str, estimator: type, parameters: dict,
     return SystemSpec(
         name=name, description=description, components=components,
         connections=(plant_connections("estimator.h_est", "estimator.vz_est")
-                     + sensor_connections(SENSOR_NAMES) + estimator_connections(estimator)),
+                     + sensor_connections(SENSOR_NAMES)
+                     + estimator_connections(estimator, sensors=SENSOR_NAMES)),
         stop_time=STOP_TIME, base_step=BASE_STEP, output_interval=0.1,
         record=RECORD + record, metrics=METRICS,
     )
