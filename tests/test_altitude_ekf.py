@@ -219,3 +219,16 @@ def test_gnss_noise_scales_with_vdop_and_satellites():
 def test_invalid_parameters_are_refused_naming_them(name, value):
     with pytest.raises(ParameterError, match=name):
         AltitudeEKF(AltitudeEKF.Params(**{name: value}))
+
+
+def test_a_start_on_the_rangefinder_takes_the_gnss_datum_when_gnss_comes():
+    """Started by a lidar reading 10 m (terrain unknown, prior 0 m), the filter meets its
+    reference, GNSS at 410 m MSL: the datum moves onto GNSS and the terrain with it (400 m),
+    nothing is isolated and no height reset is counted (a replayed PX4 log starts so)."""
+    flight = Flight()
+    flight.fly(2.0, baro=None, gps=None, laser=0.0)
+    flight.fly(10.0, baro=None, gps=400.0, laser=0.0)
+    assert abs(flight.ekf.h_est - 410.0) < 0.1
+    assert abs(flight.ekf.terrain_h - 400.0) < 0.1
+    assert not flight.isolated("gps") and not flight.isolated("laser")
+    assert flight.ekf.n_height_resets == 0

@@ -171,6 +171,7 @@ class AltitudeEKF(Estimator):
         self._reference = "baro" if p.height_ref == "baro" else "gps"
         self._reference_rejected_since: float | None = None
         self._reference_sample = (0.0, 0.0, 1.0)       # its last rejected (z, stamp, σ)
+        self._reference_seen = False
         self.n_terrain_resets = 0
         self._publish()
 
@@ -436,15 +437,21 @@ class AltitudeEKF(Estimator):
             else:
                 self._offset_known = True
         self.h_c = x[H]
+        self._reference_seen = source == self._reference
         self.started = True
         self.accept(source)
 
     def _first_sample(self, source: str, z: float, sigma: float) -> bool:
-        """The first sample of the source of d, or of a rangefinder, that disagrees with the
+        """The first sample of the reference after a start from another source: see
+        :meth:`_first_reference`. The first sample of the source of d, or of a rangefinder,
+        that disagrees with the
         state's prior (``P0_offset``, ``P0_terrain``: beyond the gate) sets its offset state
         (d = z - h or t = h - z, uncorrelated, Var = Var h + R) and is consumed; one that
         agrees is fused as any sample (a calibrated baro, a known terrain). True if
         consumed."""
+        if source == self._reference and not self._reference_seen:
+            self._reference_seen = True
+            return self._first_reference(z, sigma)
         is_offset = (source == "baro") != (self.params.height_ref == "baro") \
             and source in ("baro", "gps")
         if is_offset and not self._offset_known:
@@ -464,6 +471,25 @@ class AltitudeEKF(Estimator):
             self.P[index][j] = self.P[j][index] = 0.0
         self.P[index][index] = self.P[H][H] + sigma * sigma
         self.accept(source)
+        return True
+
+    def _first_reference(self, z: float, sigma: float) -> bool:
+        """The reference's first sample after a start from another source sets the datum:
+        if it disagrees with the height (beyond the gate), h moves onto it and d and t move
+        with it, so that the other sources' predictions stay where they were (a lidar at
+        0 m, then GNSS at 429 m MSL: the terrain becomes 429 m - range). True if consumed."""
+        h_s, _, row_h, _ = self._back(self.time)
+        predicted, row = self._model(self._reference, h_s, row_h)
+        y = z - predicted
+        S = sum(c * sum(c2 * self.P[i][j] for j, c2 in row) for i, c in row) + sigma**2
+        if y * y <= self.params.gate_sigma**2 * S:
+            return False
+        self.x[H] += y
+        self.x[D] += y if self.params.height_ref == "baro" else -y
+        self.x[T] += y
+        self.note(f"{self._reference}: first sample of the height reference {y:.4g} m from "
+                  f"the height: datum moved onto it")
+        self.accept(self._reference)
         return True
 
     def reset_height(self, source: str, innovation: float, variance: float) -> None:
