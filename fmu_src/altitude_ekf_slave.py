@@ -19,8 +19,8 @@ class AltitudeEKF(fmi.CoreSlave):
         fmi.Output("gps_bias", "m", "GNSS offset d from the baro datum (height_ref baro, "
                                     "else 0)"),
         fmi.Output("baro_scale", "1", "Baro scale factor k: baro error k·(h - h_c)"),
-        fmi.Output("terrain_h", "m", "Terrain-height estimate under the rangefinders"),
-        fmi.Output("terrain_std", "m", "1σ of terrain_h"),
+        fmi.Output("terrain_est", "m", "Terrain-height estimate under the rangefinders"),
+        fmi.Output("terrain_std", "m", "1σ of terrain_est"),
         fmi.Output("n_terrain_resets", "1", "Terrain resets after a range inconsistency",
                    type=int),
     ))

@@ -202,7 +202,7 @@ def test_rangefinder_switches_with_hysteresis_and_resets_on_a_terrain_step():
     assert flight.ekf.status & source_bit("laser", SourceBit.FUSED)
     flight.fly(10.0, laser=3.0)
     assert flight.ekf.n_terrain_resets == 1
-    assert abs(flight.ekf.terrain_h - 3.0) < 0.1
+    assert abs(flight.ekf.terrain_est - 3.0) < 0.1
     assert abs(flight.ekf.h_est - TRUE_H) < 0.3
 
 
@@ -229,6 +229,6 @@ def test_a_start_on_the_rangefinder_takes_the_gnss_datum_when_gnss_comes():
     flight.fly(2.0, baro=None, gps=None, laser=0.0)
     flight.fly(10.0, baro=None, gps=400.0, laser=0.0)
     assert abs(flight.ekf.h_est - 410.0) < 0.1
-    assert abs(flight.ekf.terrain_h - 400.0) < 0.1
+    assert abs(flight.ekf.terrain_est - 400.0) < 0.1
     assert not flight.isolated("gps") and not flight.isolated("laser")
     assert flight.ekf.n_height_resets == 0

@@ -101,7 +101,8 @@ class AltitudeEKFParams(HealthParams):
                                         "deviations (PX4: 5; 0: off)", min=0.0)
     height_ref: str = param("gps", None, "Height reference: gps (GNSS defines the datum, the "
                                          "baro gets offset and scale), baro (the baro defines "
-                                         "it, GNSS gets the offset) or range (terrain held "
+                                         "it, GNSS gets the offset) or range (the terrain "
+                                         "under the first range sample is the datum: held "
                                          "constant)")
     laser_max_height: float = param(25.0, "m", "The laser is fused below this range (seed "
                                                "004: 25 m)", positive=True)
@@ -132,7 +133,7 @@ class AltitudeEKFParams(HealthParams):
                             min=0.0)
     P0_terrain: float = param(100.0, "m2", "Variance of the terrain height before the first "
                                            "range sample", positive=True)
-    terrain_h0: float = param(0.0, "m", "Terrain height before the first range sample (its "
+    terrain_h: float = param(0.0, "m", "Terrain height before the first range sample (its "
                                         "prior, of variance P0_terrain)")
 
 
@@ -150,7 +151,7 @@ class AltitudeEKF(Estimator):
 
     def initialize_filter(self) -> None:
         p = self.params
-        self.x = [0.0, 0.0, 0.0, 0.0, 0.0, p.terrain_h0]
+        self.x = [0.0, 0.0, 0.0, 0.0, 0.0, p.terrain_h]
         self.P = [[0.0] * 6 for _ in range(6)]
         for i, var in ((V, p.P0_vz), (BA, p.P0_acc_bias), (D, p.P0_offset),
                        (K, 0.0 if p.height_ref == "baro" else p.P0_scale),
@@ -350,7 +351,7 @@ class AltitudeEKF(Estimator):
         self.x[T] -= y
         self.P = [[0.0 if (i == T) != (j == T) else pij for j, pij in enumerate(row)]
                   for i, row in enumerate(self.P)]
-        self.P[T][T] = S
+        self.P[T][T] = 0.0 if p.height_ref == "range" else S
         self.n_terrain_resets += 1
         self.note(f"{source}: inconsistent for {p.reset_timeout:g} s while the height is "
                   f"aided: terrain reset by {-y:.3g} m")
@@ -427,6 +428,8 @@ class AltitudeEKF(Estimator):
             offset = D
         x[H] = z
         P[H][H] = R
+        if offset == T and self.params.height_ref == "range":
+            P[T][T] = 0.0                                 # the terrain is the datum
         if offset is not None:
             sign = -1.0 if source == "baro" else 1.0   # h = z - d (baro), z + d, z + t
             x[H] = z + sign * x[offset]
@@ -447,8 +450,9 @@ class AltitudeEKF(Estimator):
         that disagrees with the
         state's prior (``P0_offset``, ``P0_terrain``: beyond the gate) sets its offset state
         (d = z - h or t = h - z, uncorrelated, Var = Var h + R) and is consumed; one that
-        agrees is fused as any sample (a calibrated baro, a known terrain). True if
-        consumed."""
+        agrees is fused as any sample (a calibrated baro, a known terrain). With
+        ``height_ref`` range the first range sample always sets the terrain, which is the
+        datum from then on (variance 0). True if consumed."""
         if source == self._reference and not self._reference_seen:
             self._reference_seen = True
             return self._first_reference(z, sigma)
@@ -464,12 +468,14 @@ class AltitudeEKF(Estimator):
             return False
         sigmas = self.params.gate_sigma
         y = value - self.x[index]                         # against the state's prior
-        if y * y <= sigmas * sigmas * (self.P[index][index] + self.P[H][H] + sigma * sigma):
+        frozen = index == T and self.params.height_ref == "range"
+        if not frozen and y * y <= sigmas * sigmas * (self.P[index][index] + self.P[H][H]
+                                                      + sigma * sigma):
             return False                                  # consistent: fused as any sample
         self.x[index] = value
         for j in range(6):
             self.P[index][j] = self.P[j][index] = 0.0
-        self.P[index][index] = self.P[H][H] + sigma * sigma
+        self.P[index][index] = 0.0 if frozen else self.P[H][H] + sigma * sigma
         self.accept(source)
         return True
 
@@ -477,7 +483,9 @@ class AltitudeEKF(Estimator):
         """The reference's first sample after a start from another source sets the datum:
         if it disagrees with the height (beyond the gate), h moves onto it and d and t move
         with it, so that the other sources' predictions stay where they were (a lidar at
-        0 m, then GNSS at 429 m MSL: the terrain becomes 429 m - range). True if consumed."""
+        0 m, then GNSS at 429 m MSL: the terrain becomes 429 m - range); the sample is then
+        fused as any other (so its information reaches the terrain through h). Returns
+        False: the sample is never consumed."""
         h_s, _, row_h, _ = self._back(self.time)
         predicted, row = self._model(self._reference, h_s, row_h)
         y = z - predicted
@@ -489,8 +497,7 @@ class AltitudeEKF(Estimator):
         self.x[T] += y
         self.note(f"{self._reference}: first sample of the height reference {y:.4g} m from "
                   f"the height: datum moved onto it")
-        self.accept(self._reference)
-        return True
+        return False                                      # then fused, in agreement
 
     def reset_height(self, source: str, innovation: float, variance: float) -> None:
         """Height (or, for the GNSS speed, the speed) onto the sample; its variance the
@@ -517,5 +524,5 @@ class AltitudeEKF(Estimator):
         self.baro_bias = x[D] if ref != "baro" else 0.0
         self.gps_bias = x[D] if ref == "baro" else 0.0
         self.baro_scale = x[K]
-        self.terrain_h = x[T]
+        self.terrain_est = x[T]
         self.terrain_std = math.sqrt(max(P[T][T], 0.0))

@@ -99,6 +99,6 @@ def yang2020_altitude_ekf() -> SystemSpec:
         "sensor noises (baro 20 m, GPS 30 m / 0.2 m/s, radio altimeter 10 m, accelerometer "
         "0.01 m/s²)",
         AltitudeEKF, ALTITUDE_EKF,
-        ("estimator.acc_bias", "estimator.baro_bias", "estimator.terrain_h",
+        ("estimator.acc_bias", "estimator.baro_bias", "estimator.terrain_est",
          "estimator.n_rejected", "estimator.h_valid"),
     )
