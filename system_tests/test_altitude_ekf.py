@@ -55,11 +55,13 @@ def test_in_the_jacobi_master_too(loaded, ssp_files):
 
 def test_gnss_outage_leaves_the_height_to_baro_and_radar(loaded):
     """GNSS out from 60 s to 120 s: the baro and the radio altimeter carry the height
-    (h_valid stays true, the error stays below YangFusionKF's RMS on the full flight) and
-    GNSS is fused again when it returns (its first samples pass the gate)."""
+    (h_valid stays true), the filter stays honest about it (|e| within 3 h_std at every
+    sample of the outage; measured at most 2.2 h_std, RMS 1.0 m against an h_std of
+    1.06 m: the 20 m baro and 10 m radar alone) and GNSS is fused again when it returns
+    (no sample rejected)."""
     r = run(loaded, parameters={"gnss.outage_windows": "60 120"})
     error = r["estimator.h_est"] - r["plant.h"]
     out = (r.time >= 60.0) & (r.time <= 125.0)
     assert np.all(r["estimator.h_valid"][r.time >= 1.0] > 0.5)
-    assert np.sqrt(np.mean(error[out] ** 2)) < YANG_RMS
+    assert np.all(np.abs(error[out]) <= 3.0 * r["estimator.h_std"][out])
     assert r["estimator.n_rejected"][-1] == 0
