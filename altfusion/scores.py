@@ -1,0 +1,84 @@
+"""Scores of an estimate against the truth: honesty of h_std, time to isolate a faulty
+source, recovery after a fault (docs/faults.md's pass criteria, docs/estimator_health.md).
+
+Every function takes the recorded arrays of one run (time, error = h_est - h, h_std,
+h_valid, status) on one time grid; a window is a half-open interval [start, end) of time.
+Samples where the estimator says its output is not valid (``h_valid`` false) claim nothing:
+they count in neither the coverage nor the recovery RMS.
+"""
+
+import math
+
+import numpy as np
+
+from altfusion.estimators.base import SourceBit, source_bit
+
+COVERAGE_SIGMAS = 2.0
+"""|e| <= 2 h_std: 95.4 % of the time for a Gaussian error with an honest h_std."""
+
+HONEST_COVERAGE = (0.85, 0.995)
+"""docs/faults.md: the coverage of an honest h_std lies between 85 % and 99.5 %."""
+
+RECOVERY_FACTOR = 3.0
+"""docs/faults.md: after a fault the error returns within 3x its nominal RMS."""
+
+
+def outside(time: np.ndarray, windows: tuple[tuple[float, float], ...]) -> np.ndarray:
+    """Mask of the samples of ``time`` outside every window [start, end)."""
+    mask = np.ones(len(time), dtype=bool)
+    for start, end in windows:
+        mask &= ~((time >= start) & (time < end))
+    return mask
+
+
+def coverage(time: np.ndarray, error: np.ndarray, h_std: np.ndarray,
+             valid: np.ndarray | None = None,
+             excluded: tuple[tuple[float, float], ...] = ()) -> float:
+    """Fraction of the valid samples outside the ``excluded`` windows (fault transients)
+    where |error| <= 2 h_std; NaN if there is no such sample."""
+    mask = outside(time, excluded)
+    if valid is not None:
+        mask &= np.asarray(valid) > 0.5
+    if not mask.any():
+        return math.nan
+    within = np.abs(error[mask]) <= COVERAGE_SIGMAS * h_std[mask]
+    return float(np.mean(within))
+
+
+def isolation_time(time: np.ndarray, status: np.ndarray, source: str,
+                   start: float) -> float | None:
+    """Seconds from ``start`` to the first sample at or after it whose ``status`` has
+    ``source``'s ISOLATED bit, or None if it never does."""
+    bit = source_bit(source, SourceBit.ISOLATED)
+    flagged = (time >= start) & ((np.asarray(status).astype(np.int64) & bit) != 0)
+    if not flagged.any():
+        return None
+    return float(time[np.argmax(flagged)] - start)
+
+
+def rms(error: np.ndarray, mask: np.ndarray) -> float:
+    """RMS of ``error`` over ``mask``; NaN if the mask is empty."""
+    return float(np.sqrt(np.mean(error[mask] ** 2))) if mask.any() else math.nan
+
+
+def window_rms(time: np.ndarray, error: np.ndarray, valid: np.ndarray | None,
+               start: float, end: float = math.inf) -> float:
+    """RMS of the valid samples of ``error`` in [start, end); NaN if there is none."""
+    mask = (time >= start) & (time < end)
+    if valid is not None:
+        mask &= np.asarray(valid) > 0.5
+    return rms(error, mask)
+
+
+def recovered(time: np.ndarray, error: np.ndarray, valid: np.ndarray,
+              nominal_error: np.ndarray, nominal_valid: np.ndarray,
+              after: float, end: float = math.inf) -> tuple[bool, float, float]:
+    """Whether the error is back within :data:`RECOVERY_FACTOR` times its nominal RMS over
+    [after, end): (passed, RMS of the faulty run's valid samples, nominal RMS over the same
+    window). A run whose output is invalid over the whole window passes (``h_valid`` false
+    is an honest answer)."""
+    faulty = window_rms(time, error, valid, after, end)
+    nominal = window_rms(time, nominal_error, nominal_valid, after, end)
+    if math.isnan(faulty):
+        return True, faulty, nominal
+    return bool(faulty <= RECOVERY_FACTOR * nominal), faulty, nominal
