@@ -51,8 +51,10 @@ METRICS = (Metric("estimate error", "estimator.h_est", "plant.h"),
            Metric("radar_h error", "radar.radar_h", "plant.h"))
 
 
-def _closed_loop(name: str, description: str, estimator: type, parameters: dict,
-                 record: tuple[str, ...] = ()) -> SystemSpec:
+def closed_loop(name: str, description: str, estimator: type, parameters: dict,
+                record: tuple[str, ...] = ()) -> SystemSpec:
+    """Seed 003's loop flown on ``estimator`` (an Estimator class; its FMU has the class's
+    name) with ``parameters``, recording :data:`RECORD` and ``record``."""
     components = (
         plant_components("yang2020", step=BASE_STEP)
         + sensor_components(SENSOR_NAMES, step=BASE_STEP, parameters=SEED_003_SENSORS,
@@ -71,7 +73,7 @@ def _closed_loop(name: str, description: str, estimator: type, parameters: dict,
 
 def yang2020() -> SystemSpec:
     """Seed 003's scenario flown on YangFusionKF's estimate (the default system)."""
-    return _closed_loop(
+    return closed_loop(
         "yang2020",
         "Seed 003 Section 4: climb/cruise/descend flown closed loop on YangFusionKF's "
         "estimate; GPS 30 m / 0.2 m/s at 100 ms, baro 20 m at 10 ms, radio altimeter 10 m at "
@@ -83,7 +85,7 @@ def yang2020() -> SystemSpec:
 
 def yang2020_baseline() -> SystemSpec:
     """The loop of :func:`yang2020` flown on BaselineKF (baro and GPS)."""
-    return _closed_loop(
+    return closed_loop(
         "yang2020_baseline",
         "Seed 003's scenario (see yang2020) flown closed loop on BaselineKF (baro 20 m, "
         "GPS 30 m)",
@@ -93,7 +95,7 @@ def yang2020_baseline() -> SystemSpec:
 
 def yang2020_altitude_ekf() -> SystemSpec:
     """The loop of :func:`yang2020` flown on AltitudeEKF (every sensor, seed 003's noises)."""
-    return _closed_loop(
+    return closed_loop(
         "yang2020_altitude_ekf",
         "Seed 003's scenario (see yang2020) flown closed loop on AltitudeEKF with seed 003's "
         "sensor noises (baro 20 m, GPS 30 m / 0.2 m/s, radio altimeter 10 m, accelerometer "
