@@ -232,3 +232,56 @@ def test_a_start_on_the_rangefinder_takes_the_gnss_datum_when_gnss_comes():
     assert abs(flight.ekf.terrain_est - 400.0) < 0.1
     assert not flight.isolated("gps") and not flight.isolated("laser")
     assert flight.ekf.n_height_resets == 0
+
+
+def test_height_ref_range_holds_the_ground_under_the_first_range_sample():
+    """height_ref range: the terrain under the first range sample is the datum (held
+    constant), so a GNSS 2 m off moves neither the terrain nor the height, which follows
+    the laser (h - terrain within 5 cm of the laser's truth: 5 laser σ), where with
+    height_ref gps the reference takes the height (reset to it) and the terrain moves with
+    it."""
+    ends = {}
+    for ref in ("range", "gps"):
+        flight = Flight(height_ref=ref)
+        flight.fly(10.0, laser=0.0)
+        terrain = flight.ekf.terrain_est
+        flight.fly(60.0, laser=0.0, gps=2.0)
+        ends[ref] = (flight.ekf.terrain_est - terrain, flight.ekf.h_est - TRUE_H, terrain)
+    assert ends["range"][0] == 0.0 and abs(ends["range"][1] - ends["range"][2]) < 0.05
+    assert ends["gps"][0] > 1.0
+
+
+def test_ground_effect_dead_zone_ignores_negative_baro_innovations_near_the_ground():
+    """PX4 EKF2_GND_EFF_DZ: within ground_effect_height of the ground a baro reading 1.5 m
+    low (rotor wash; within its gate) is ignored within a 4 m dead zone: the baro offset
+    does not move (less than 0.1 m in the second it lasts); without the dead zone the
+    offset takes the 1.5 m (more than 0.3 m of it within the second). The height stays with
+    the GNSS either way."""
+    moved = {}
+    for deadzone in (0.0, 4.0):
+        flight = Flight(ground_effect_deadzone=deadzone, ground_effect_height=20.0)
+        flight.fly(10.0)
+        offset = flight.ekf.baro_bias
+        flight.fly(1.0, baro=-1.5)
+        moved[deadzone] = flight.ekf.baro_bias - offset
+        assert abs(flight.ekf.h_est - TRUE_H) < 0.3
+    assert abs(moved[4.0]) < 0.1
+    assert moved[0.0] < -0.3
+
+
+def test_noise_adaptation_is_bounded_and_weights_a_noisy_source_down():
+    """Seed 004's adaptation (adaptive_noise), gates off as in seed 004: a baro 10x
+    noisier than its nominal 0.5 m, the only height source, is weighted down (the height
+    error is smaller than without adaptation) and the factor on R never exceeds
+    adaptive_max."""
+    rms = {}
+    for adaptive in (False, True):
+        flight = Flight(seed=5, adaptive_noise=adaptive, adaptive_max=100.0, gate_sigma=0.0)
+        flight.fly(10.0)
+        rows = []
+        noisy = flight.rng.standard_normal(1500) * 5.0
+        for k in range(1500):                     # the baro alone: no GNSS
+            flight.fly(STEP, baro=noisy[k], gps=None, record=rows)
+        rms[adaptive] = float(np.sqrt(np.mean([(r[1] - TRUE_H) ** 2 for r in rows])))
+        assert flight.ekf._adaptation("baro") <= 100.0
+    assert rms[True] < 0.7 * rms[False]

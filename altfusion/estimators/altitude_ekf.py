@@ -300,7 +300,7 @@ class AltitudeEKF(Estimator):
         S = sum(c * sum(c2 * self.P[i][j] for j, c2 in row) for i, c in row) + R
         if source in ("radar", "laser") and self._terrain_step(source, z, y, S):
             return
-        if source == self._reference:
+        if source == self._reference and self.params.height_ref != "range":
             if self._reference_step(source, y, S):
                 return
             self._reference_sample = (z, stamp, sigma)
