@@ -33,15 +33,18 @@ SENSOR_STEPS = {"gnss": 0.1, "radar": 0.2}
 BASELINE = {"R_baro": 400.0, "R_gps": 900.0}
 """BaselineKF given seed 003's baro and GPS variances (20 m and 30 m)."""
 
-ALTITUDE_EKF = {"baro_noise": 20.0, "gps_noise": 30.0, "gps_vz_noise": 0.2, "acc_noise": 0.01,
-                "radar_noise": 10.0, "P0_offset": 1.0, "baro_bias_psd": 0.0, "P0_scale": 0.0,
+ALTITUDE_EKF_NOISES = {"baro_noise": 20.0, "gps_noise": 30.0, "gps_vz_noise": 0.2,
+                       "acc_noise": 0.01, "radar_noise": 10.0}
+"""Seed 003's sensor noises (Section 4.2) by their contract names."""
+
+ALTITUDE_EKF = {**ALTITUDE_EKF_NOISES, "P0_offset": 1.0, "baro_bias_psd": 0.0, "P0_scale": 0.0,
                 "baro_scale_psd": 0.0, "P0_terrain": 1e-8, "terrain_psd": 0.0,
                 "P0_acc_bias": 1e-6, "acc_bias_psd": 0.0}
-"""AltitudeEKF given seed 003's sensor error models (Section 4.2) by their contract names:
-the noises; a barometer calibrated at launch without drift or scale error (offset prior 1 m,
-no random walk); the terrain known flat at 0 m (eq. 6's Q_sealevel); an accelerometer
-without bias (b_a's prior 1 mm/s²). Priors wider than the truth's spread make h_std
-conservative (the coverage |e| <= 2 h_std reaches 100 %)."""
+"""AltitudeEKF given seed 003's sensor error models (Section 4.2): the noises; a barometer
+calibrated at launch without drift or scale error (offset prior 1 m, no random walk); the
+terrain known flat at 0 m (eq. 6's Q_sealevel); an accelerometer without bias (b_a's prior 1
+mm/s²). Priors wider than the truth's spread make h_std conservative (the coverage |e| <= 2
+h_std reaches 100 %)."""
 
 RECORD = ("plant.h", "plant.vz", "plant.az", "controller.h_ref", "controller.thrust",
           "air_data.baro_h", "gnss.gps_h", "gnss.gps_vz", "radar.radar_h",
