@@ -10,7 +10,8 @@ three faults of the suite (docs/faults.md), once on AltitudeEKF and once on Yang
 Sensors, steps and the estimators' noise parameters are those of ``yang2020`` (seed 003
 Section 4.2; AltitudeEKF gets the noises only, its bias priors stay the defaults); the same
 run of a campaign gives both systems the same weather and sensor noise.
-``benchmarks/fault_demo.py`` flies both and draws ``docs/fault_demo.png``. """
+``benchmarks/fault_demo.py`` flies both and draws ``docs/fault_demo.png``.
+"""
 
 from dataclasses import replace
 
