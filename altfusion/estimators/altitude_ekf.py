@@ -8,12 +8,14 @@ speed (m/s), accelerometer bias (m/s²), the offset d (m) of the non-reference o
 GNSS, the barometer's scale factor k (1) and the terrain height t (m) under the rangefinders.
 
 Time update over the estimator's step Δ, the accelerometer as input (PX4: the IMU drives the
-prediction), a = acc_z - b_a, with a the mean of the samples held over the step:
+prediction), a = acc_z - b_a, acc_z the mean of two samples that bound the step (else the
+latest one, held):
 
     h⁺ = h + Δ·v + Δ²/2·a,   v⁺ = v + Δ·a,   b_a, d, k, t: random walks
-    Q: white acceleration of PSD acc_noise²·Δ on (h, v) (``accel_psd`` without an
-       accelerometer, whose a is then 0), acc_bias_psd, baro_bias_psd, baro_scale_psd and
-       terrain_psd on the others (``height_ref`` "baro" freezes k; "range" freezes t)
+    Q: white acceleration of PSD acc_noise²·T_acc on (h, v), T_acc the accelerometer's
+       sample period, at least Δ (``accel_psd`` without an accelerometer, whose a is then
+       0); acc_bias_psd, baro_bias_psd, baro_scale_psd and terrain_psd on the others
+       (``height_ref`` "baro" freezes k; "range" freezes t)
 
 Measurements (one scalar update each, Joseph form, ``kalman.update_scalar``), each at its own
 time stamp s ≤ now: the state is taken back by δ = now - s along the model,
@@ -26,7 +28,10 @@ h(s) = h - δ·v + δ²/2·a and v(s) = v - δ·a, and the Jacobian row follows 
     GNSS vertical speed:  z = v(s);   radar, laser:  z = h(s) - t
 
 Each sample passes the shared innovation gate (``gate_sigma``, PX4's 5σ) and health logic of
-``estimators/base.py`` (isolation, height reset when every source disagrees).
+``estimators/base.py`` (isolation, height reset when every source disagrees); on top, PX4's
+reset to the height reference (a reference that jumped takes the height; one returning
+inconsistent after an outage is not re-admitted) and a terrain reset when a rangefinder stays
+inconsistent while the height is pinned by the others.
 
 Deviations from PX4 EKF2 (reasons in docs/altitude_ekf.md):
 
@@ -192,8 +197,8 @@ class AltitudeEKF(Estimator):
                 self._acc_period = min(self._acc[0] - previous[0], p.acc_timeout)
         acc_on = self._acc is not None and now - self._acc[0] <= p.acc_timeout
         if acc_on and acc_sample is not None and previous is not None \
-                and now - previous[0] <= p.acc_timeout:
-            a_in = 0.5 * (previous[1] + self._acc[1])    # linear between the two samples
+                and previous[0] >= now - dt * (1.0 + 1e-6):
+            a_in = 0.5 * (previous[1] + self._acc[1])    # two samples bound the step
         else:
             a_in = self._acc[1] if acc_on else 0.0
         self._acc_used = acc_on
