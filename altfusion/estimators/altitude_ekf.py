@@ -366,9 +366,12 @@ class AltitudeEKF(Estimator):
     def _reference_step(self, source: str, y: float, S: float) -> bool:
         """PX4's reset to the height reference: the reference source, fused until its
         samples jumped, rejected for ``reset_timeout``, takes the height with it (the other
-        sources' offsets are learnt anew). A reference returning inconsistent after an outage
-        (not fused for ``reset_timeout`` before its first rejection) is not re-admitted: it
-        stays rejected and, contradicted by the sources that carried the height, isolated.
+        sources' offsets are learnt anew), unless another source fused within
+        ``reset_timeout`` pins the height tighter than the jump (``contradicted``): then the
+        reference is the faulty one and is isolated (the fault suite's gnss_step). A
+        reference returning inconsistent after an outage (not fused for ``reset_timeout``
+        before its first rejection) is not re-admitted: it stays rejected and, contradicted
+        by the sources that carried the height, isolated.
         True if the height was reset."""
         p = self.params
         if not p.fault_detection or p.gate_sigma <= 0.0 or y * y <= p.gate_sigma**2 * S:
@@ -377,7 +380,8 @@ class AltitudeEKF(Estimator):
         if self._reference_rejected_since is None:
             in_use = now - self._last_fused.get(source, -math.inf) <= p.reset_timeout
             self._reference_rejected_since = now if in_use else math.inf
-        if now - self._reference_rejected_since < p.reset_timeout:
+        if now - self._reference_rejected_since < p.reset_timeout \
+                or self.contradicted(source, y):
             return False
         self._reset_to_reference(y, S)
         return True
