@@ -8,6 +8,7 @@ import pytest
 from state_restore import assert_restores_identically
 
 from altfusion.cosim.instances import CosimError, FmuInstance, fmu_info
+from altfusion.estimators.altitude_ekf import AltitudeEKF
 from altfusion.estimators.bao import BaoDriftEstimator
 from altfusion.estimators.base import SourceBit, Status, source_bit
 from altfusion.estimators.baseline import BaselineKF
@@ -17,7 +18,7 @@ from altfusion.estimators.xu import XuSHAEKF
 from altfusion.estimators.yang import YangFusionKF
 
 ESTIMATORS = ("BaselineKF", "HajiyevAdaptiveEstimator", "WhangGAEstimator",
-              "BaoDriftEstimator", "YangFusionKF", "XuSHAEKF")
+              "BaoDriftEstimator", "YangFusionKF", "XuSHAEKF", "AltitudeEKF")
 STEP = 0.2
 TRUTH = 1000.0
 GPS_EVERY = 5
@@ -104,13 +105,16 @@ class Harness:
 # bias wander 20 m per air-data step (Q_b = 400 m²), which makes any GPS jump plausible, so
 # the outlier test gives it a bias random walk that matches this steady scene. Bao, Yang and
 # Xu are told this scene's GPS accuracy (and the baro noise where their h_std includes it);
-# Bao corrects the wind; Xu expects a baro constant error of tens of metres.
+# Bao corrects the wind; Xu expects a baro constant error of tens of metres, AltitudeEKF
+# (every noise of this scene) a baro offset of σ 30 m.
 TUNING = {"BaselineKF": {"R_gps": 100.0}, "HajiyevAdaptiveEstimator": {},
           "WhangGAEstimator": {"R_gps": 100.0, "Q_b": 0.04},
           "BaoDriftEstimator": {"user_range_error": 10.0, "R_gps": 100.0, "R_baro": 9.0,
                                 "use_wind": True},
           "YangFusionKF": {"R_gps": 100.0},
-          "XuSHAEKF": {"R_gps": 100.0, "R_baro": 9.0, "baro_bias_std": 30.0}}
+          "XuSHAEKF": {"R_gps": 100.0, "R_baro": 9.0, "baro_bias_std": 30.0},
+          "AltitudeEKF": {"gps_noise": 10.0, "baro_noise": 3.0, "acc_noise": 0.05,
+                          "radar_noise": 10.0, "P0_offset": 900.0}}
 
 
 @pytest.fixture(params=ESTIMATORS)
@@ -138,7 +142,7 @@ NON_FINITE_CASES = [
     (name, streams) for name in ESTIMATORS for streams in (
         ("baro",), ("gps",), ("baro", "gps"),
         *{"BaoDriftEstimator": [("wind_speed",)], "YangFusionKF": [("acc",), ("radar",)],
-          "XuSHAEKF": [("acc",)]}.get(name, []))
+          "XuSHAEKF": [("acc",)], "AltitudeEKF": [("acc",), ("radar",)]}.get(name, []))
 ]
 
 
@@ -193,10 +197,11 @@ def test_a_100_m_gps_outlier_is_rejected_or_bounded_and_logged(fmus, name):
 
 @pytest.mark.parametrize("name", ESTIMATORS)
 def test_invalid_parameters_are_rejected_at_initialization_by_name(fmus, name):
+    parameter = "gps_noise" if name == "AltitudeEKF" else "R_gps"  # contract name, σ
     instance = FmuInstance("estimator", fmu_info(fmus[name]))
     try:
-        instance.initialize({"R_gps": -1.0}, STEP, 0.0, 10.0)
-        with pytest.raises(CosimError, match=r"'R_gps' = -1\.0: must be > 0"):
+        instance.initialize({parameter: -1.0}, STEP, 0.0, 10.0)
+        with pytest.raises(CosimError, match=rf"'{parameter}' = -1\.0: must be > 0"):
             instance.exit_initialization()
     finally:
         instance.free()
@@ -223,7 +228,7 @@ def test_state_save_and_restore_continue_bit_identically(fmus, name):
 
 CORES = {"BaselineKF": BaselineKF, "HajiyevAdaptiveEstimator": HajiyevAdaptiveEstimator,
          "WhangGAEstimator": WhangGAEstimator, "BaoDriftEstimator": BaoDriftEstimator,
-         "YangFusionKF": YangFusionKF, "XuSHAEKF": XuSHAEKF}
+         "YangFusionKF": YangFusionKF, "XuSHAEKF": XuSHAEKF, "AltitudeEKF": AltitudeEKF}
 """The core class of each estimator FMU (which inputs it declares)."""
 
 WILD_SAMPLES = [

@@ -127,6 +127,21 @@ def test_on_the_real_flight_every_estimator_agrees_with_px4_ekf2_within_sensor_n
         assert results[f"{report.name}.gps_rejected"][-1] == 0, report.name
 
 
+def test_altitude_ekf_ground_height_scatters_no_more_than_ekf2s(ssp_files):
+    """Issue 16: on the Auterion flight AltitudeEKF's rangefinder-implied ground height
+    (h_est - laser_h at each valid lidar sample after the settle time) scatters no more than
+    EKF2's own (ekf_h - laser_h) + 0.1 m: its height is at least as smooth against the
+    lidar as the autopilot's."""
+    loaded = read_ssp(ssp_files["replay_auterion"])
+    with Simulation(loaded.spec, loaded.fmu_paths) as simulation:
+        results = simulation.run()
+    reports = {r.name: r for r in compare_all(results, ["AltitudeEKF"], settle_time(results))}
+    ekf2, ours = reports.pop(next(n for n in reports if n != "AltitudeEKF")), reports[
+        "AltitudeEKF"]
+    assert ours.ground.n == ekf2.ground.n > 100
+    assert ours.ground.std <= ekf2.ground.std + 0.1
+
+
 def test_altfusion_replay_prints_the_comparison_and_writes_csv_and_plot(fmus, tmp_path, capsys):
     log = LOG_DIR / LOGS["replay_px4_sitl"].file
     assert main(["replay", str(log), "--models", str(MODELS), "--out", str(tmp_path),

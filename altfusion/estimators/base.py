@@ -81,6 +81,8 @@ GPS_VZ = Stream("gps", ("gps_h", "gps_vz"), "gps_fix")
 ACC = Stream("acc", ("acc_z",))
 RADAR = Stream("radar", ("radar_h",), "radar_valid")
 LASER = Stream("laser", ("laser_h",), "laser_valid")
+BARO_ALL = Stream("baro", ("baro_h", "baro_p", "baro_T"))
+GPS_ALL = Stream("gps", ("gps_h", "gps_vz", "gps_vdop", "gps_nsat"), "gps_fix")
 
 HEIGHT_SOURCES = ("baro", "gps", "radar", "laser")
 """The sources that aid the height (their fusion keeps ``h_valid`` true)."""

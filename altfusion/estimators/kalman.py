@@ -156,3 +156,24 @@ def update_state_component(x: Vector, P: Matrix, index: int, z: float, variance:
               for p_ab, r_b, k_b in zip(P_a, row, K, strict=True)]         # fastest to build
              for P_a, r_a, k_a in zip(P, row, K, strict=True)]
     return x_new, P_new, y, S
+
+
+def update_scalar(x: Vector, P: Matrix, H: Sequence[tuple[int, float]], innovation: float,
+                  variance: float) -> tuple[list[float], list[list[float]], float]:
+    """:func:`update` for one scalar measurement whose Jacobian row H is sparse (given as
+    (state index, coefficient) pairs), in scalar arithmetic; ``innovation`` y = z - h(x⁻) is
+    computed by the caller (an extended Kalman filter's nonlinear h); returns x, P and the
+    innovation variance S.
+
+        r = P⁻ Hᵀ,  S = H r + R,  K = r / S,  x = x⁻ + K y
+        P = P⁻ - (K rᵀ + r Kᵀ) + S K Kᵀ            (Joseph form, as update_state_component)
+
+    P stays exactly symmetric (each entry's sum is the same float for (a, b) and (b, a))."""
+    row = [sum(h * P_a[i] for i, h in H) for P_a in P]
+    S = sum(h * row[i] for i, h in H) + variance
+    K = [r / S for r in row]
+    x_new = [xa + ka * innovation for xa, ka in zip(x, K, strict=True)]
+    P_new = [[p_ab - (k_a * r_b + r_a * k_b) + k_a * k_b * S
+              for p_ab, r_b, k_b in zip(P_a, row, K, strict=True)]
+             for P_a, r_a, k_a in zip(P, row, K, strict=True)]
+    return x_new, P_new, S

@@ -27,6 +27,11 @@ replay runs them with noises from the logged sensors instead:
   as BaselineKF's); with the paper's 39.69 m²/s² the rate state follows the baro noise
   (±4 m/s) and coasts 4 m through the Auterion log's 2.2 s air-data gap.
 
+AltitudeEKF takes the same GPS and baro σ (the GPS σ from epv, so not scaled by VDOP), the
+baro offset prior, the vibration-dominated accelerometer noise as its ``acc_noise`` and, as
+Yang and Xu, the log's ground height ``terrain_h`` (σ 0.1 m, constant): without it the
+terrain is learnt from GPS during the flight and h - range drifts by 1 m while it converges.
+
 Hajiyev's filter has no bias state: its adaptive factor (eq. 30) sees the 155 m residual and
 turns the gain to ~1, so it follows GPS and the baro only interpolates between GPS samples.
 Estimators not listed run with their defaults.
@@ -39,6 +44,7 @@ import numpy as np
 
 from altfusion.constants import ISA_T0
 from altfusion.cosim.system import ComponentSpec, Connection, SystemSpec
+from altfusion.estimators.altitude_ekf import AltitudeEKF
 from altfusion.estimators.bao import BaoDriftEstimator
 from altfusion.estimators.baseline import BaselineKF
 from altfusion.estimators.hajiyev import HajiyevAdaptiveEstimator
@@ -58,6 +64,9 @@ BASE_STEP = 0.01
 GPS_SIGMA, BARO_SIGMA, BARO_OFFSET_SIGMA = 0.8, 0.6, 200.0
 UNREFERENCED_BARO_SIGMA = 1000.0
 """Yang's fusion has no bias state: a QNH-referenced baro gets (almost) no weight."""
+TERRAIN_SIGMA = 0.1
+"""AltitudeEKF's terrain prior around the log's ground height (its launch calibration): the
+median of GPS altitude minus rangefinder height over the flight."""
 ACC_VIBRATION_SIGMA = 9.0
 """Vertical acceleration noise of the logged, vibration-dominated accelerometer, m/s²."""
 
@@ -74,6 +83,9 @@ REPLAY_TUNING: dict[str, dict[str, Any]] = {
                      "R_gps_vz": 0.2**2, "R_acc": ACC_VIBRATION_SIGMA**2},
     "XuSHAEKF": {"R_gps": GPS_SIGMA**2, "R_baro": BARO_SIGMA**2,
                  "baro_bias_std": BARO_OFFSET_SIGMA, "acc_noise_std": ACC_VIBRATION_SIGMA},
+    "AltitudeEKF": {"gps_noise": GPS_SIGMA, "gps_dop_scaling": False, "baro_noise": BARO_SIGMA,
+                    "P0_offset": BARO_OFFSET_SIGMA**2, "acc_noise": ACC_VIBRATION_SIGMA,
+                    "P0_terrain": TERRAIN_SIGMA**2, "terrain_psd": 0.0},
 }
 """Parameters of each estimator for replayed PX4 logs (see the module docstring)."""
 
@@ -84,6 +96,7 @@ CATALOG_ESTIMATORS = {
     "BaoDriftEstimator": BaoDriftEstimator,
     "YangFusionKF": YangFusionKF,
     "XuSHAEKF": XuSHAEKF,
+    "AltitudeEKF": AltitudeEKF,
 }
 """The estimators of the catalog replay systems, by FMU model name."""
 
@@ -137,7 +150,7 @@ def launch_calibration(log: FlightLog) -> dict[str, float]:
 
 
 TUNED_BY_CALIBRATION = {"WhangGAEstimator": ("H0", "T0"), "XuSHAEKF": ("terrain_h",),
-                        "YangFusionKF": ("terrain_h",)}
+                        "YangFusionKF": ("terrain_h",), "AltitudeEKF": ("terrain_h",)}
 """The calibration entries each estimator takes as parameters."""
 
 

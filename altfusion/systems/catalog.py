@@ -6,6 +6,7 @@ from dataclasses import replace
 from altfusion.cosim.system import Metric, SystemSpec
 from altfusion.replay.system import LOGS, catalog_replay
 from altfusion.systems.bao2017 import bao2017
+from altfusion.systems.fault_demo import fault_demo_altitude_ekf, fault_demo_yang
 from altfusion.systems.faults import fault_flight, with_fault
 from altfusion.systems.hajiyev import hajiyev, hajiyev_drift
 from altfusion.systems.plant import plant_components, plant_connections
@@ -17,7 +18,7 @@ from altfusion.systems.xu2016 import (
     xu2016_multipoint,
     xu2016_multipoint_wind,
 )
-from altfusion.systems.yang2020 import yang2020, yang2020_baseline
+from altfusion.systems.yang2020 import yang2020, yang2020_altitude_ekf, yang2020_baseline
 
 
 def plant_yang2020() -> SystemSpec:
@@ -77,6 +78,7 @@ SYSTEMS: dict[str, Callable[[], SystemSpec]] = {
     "hajiyev_drift": hajiyev_drift,
     "yang2020": yang2020,
     "yang2020_baseline": yang2020_baseline,
+    "yang2020_altitude_ekf": yang2020_altitude_ekf,
     "bao2017": bao2017,
     "xu2016_hover15": xu2016_hover15,
     "xu2016_hover35": xu2016_hover35,
@@ -84,6 +86,8 @@ SYSTEMS: dict[str, Callable[[], SystemSpec]] = {
     "xu2016_multipoint_wind": xu2016_multipoint_wind,
     "fault_flight": fault_flight,
     "fault_flight_baro_step": fault_flight_baro_step,
+    "fault_demo_altitude_ekf": fault_demo_altitude_ekf,
+    "fault_demo_yang": fault_demo_yang,
 }
 
 DEFAULT_SYSTEM = "yang2020"

@@ -198,10 +198,16 @@ TRUE_NOISE: dict[str, dict[str, Any]] = {
     "YangFusionKF": {},
     "XuSHAEKF": {"R_baro": BARO_VARIANCE, "R_gps": GPS_VARIANCE,
                  "acc_noise_std": SEED_003_SENSORS["accelerometer"]["noise_std"]},
+    "AltitudeEKF": {"baro_noise": BARO_VARIANCE**0.5, "gps_noise": GPS_VARIANCE**0.5,
+                    "gps_vz_noise": SEED_003_SENSORS["gnss"]["velocity_noise_std"],
+                    "acc_noise": SEED_003_SENSORS["accelerometer"]["noise_std"],
+                    "radar_noise": SEED_003_SENSORS["radar"]["noise_std"],
+                    "laser_noise": 0.005},
 }
 """Each estimator's noise parameters set to the flight's sensors (seed 003 Section 4.2:
 baro 20 m, GPS 30 m, accelerometer 0.01 m/s²; YangFusionKF's defaults are these already;
-the laser keeps its 5 mm, XuSHAEKF's default). BaoDriftEstimator's worst accepted GNSS
+the laser keeps its 5 mm, XuSHAEKF's default; AltitudeEKF takes all of them by their
+contract names). BaoDriftEstimator's worst accepted GNSS
 variance R_worst (eq. 14) is (2σ)² of the GPS."""
 
 ESTIMATOR_RECORD = ("h_est", "vz_est", "h_std", "h_valid", "status", "n_height_resets")

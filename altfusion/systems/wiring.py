@@ -21,8 +21,11 @@ speed of seed 001's wind correction (eq. 11), the wind the air-data module feels
 
 
 def estimator_connections(estimator: type[Estimator], component: str = "estimator",
-                          ) -> tuple[Connection, ...]:
-    """Every input ``estimator`` declares, from the sensor output of the same name."""
+                          sensors: tuple[str, ...] | None = None) -> tuple[Connection, ...]:
+    """Every input ``estimator`` declares, from the sensor output of the same name; with
+    ``sensors``, only the inputs from those sensor components (an estimator that takes any
+    subset of the sensors, AltitudeEKF, in a system without some of them: its unconnected
+    streams never deliver a sample)."""
     connections = []
     for name in estimator.declared_inputs():
         if name in EXTRA_SOURCES:
@@ -32,5 +35,6 @@ def estimator_connections(estimator: type[Estimator], component: str = "estimato
         if sensor is None:
             raise ValueError(f"{estimator.__name__} input '{name}' is no sensor output of "
                              f"{sorted(SENSOR_OF_PREFIX.values())}")
-        connections.append(Connection(f"{sensor}.{name}", f"{component}.{name}"))
+        if sensors is None or sensor in sensors:
+            connections.append(Connection(f"{sensor}.{name}", f"{component}.{name}"))
     return tuple(connections)

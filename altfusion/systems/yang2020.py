@@ -13,10 +13,12 @@ radio altimeter (200 ms), which are stepped at their sample periods. Signals are
 every 0.1 s.
 
 ``yang2020_baseline`` is the same loop flown on BaselineKF (baro and GPS only, seed 003's
-variances); the same run of a campaign gives both systems identical weather and sensor noise.
+variances), ``yang2020_altitude_ekf`` on AltitudeEKF (every sensor, seed 003's noises); the
+same run of a campaign gives these systems identical weather and sensor noise.
 """
 
 from altfusion.cosim.system import ComponentSpec, Metric, SystemSpec
+from altfusion.estimators.altitude_ekf import AltitudeEKF
 from altfusion.estimators.baseline import BaselineKF
 from altfusion.estimators.yang import YangFusionKF
 from altfusion.systems.plant import plant_components, plant_connections
@@ -31,6 +33,19 @@ SENSOR_STEPS = {"gnss": 0.1, "radar": 0.2}
 BASELINE = {"R_baro": 400.0, "R_gps": 900.0}
 """BaselineKF given seed 003's baro and GPS variances (20 m and 30 m)."""
 
+ALTITUDE_EKF_NOISES = {"baro_noise": 20.0, "gps_noise": 30.0, "gps_vz_noise": 0.2,
+                       "acc_noise": 0.01, "radar_noise": 10.0}
+"""Seed 003's sensor noises (Section 4.2) by their contract names."""
+
+ALTITUDE_EKF = {**ALTITUDE_EKF_NOISES, "P0_offset": 1.0, "baro_bias_psd": 0.0, "P0_scale": 0.0,
+                "baro_scale_psd": 0.0, "P0_terrain": 1e-8, "terrain_psd": 0.0,
+                "P0_acc_bias": 1e-6, "acc_bias_psd": 0.0}
+"""AltitudeEKF given seed 003's sensor error models (Section 4.2): the noises; a barometer
+calibrated at launch without drift or scale error (offset prior 1 m, no random walk); the
+terrain known flat at 0 m (eq. 6's Q_sealevel); an accelerometer without bias (b_a's prior 1
+mm/s²). Priors wider than the truth's spread make h_std conservative (the coverage |e| <= 2
+h_std reaches 100 %)."""
+
 RECORD = ("plant.h", "plant.vz", "plant.az", "controller.h_ref", "controller.thrust",
           "air_data.baro_h", "gnss.gps_h", "gnss.gps_vz", "radar.radar_h",
           "accelerometer.acc_z", "estimator.h_est", "estimator.vz_est", "estimator.h_std")
@@ -42,8 +57,10 @@ METRICS = (Metric("estimate error", "estimator.h_est", "plant.h"),
            Metric("radar_h error", "radar.radar_h", "plant.h"))
 
 
-def _closed_loop(name: str, description: str, estimator: type, parameters: dict,
-                 record: tuple[str, ...] = ()) -> SystemSpec:
+def closed_loop(name: str, description: str, estimator: type, parameters: dict,
+                record: tuple[str, ...] = ()) -> SystemSpec:
+    """Seed 003's loop flown on ``estimator`` (an Estimator class; its FMU has the class's
+    name) with ``parameters``, recording :data:`RECORD` and ``record``."""
     components = (
         plant_components("yang2020", step=BASE_STEP)
         + sensor_components(SENSOR_NAMES, step=BASE_STEP, parameters=SEED_003_SENSORS,
@@ -53,7 +70,8 @@ def _closed_loop(name: str, description: str, estimator: type, parameters: dict,
     return SystemSpec(
         name=name, description=description, components=components,
         connections=(plant_connections("estimator.h_est", "estimator.vz_est")
-                     + sensor_connections(SENSOR_NAMES) + estimator_connections(estimator)),
+                     + sensor_connections(SENSOR_NAMES)
+                     + estimator_connections(estimator, sensors=SENSOR_NAMES)),
         stop_time=STOP_TIME, base_step=BASE_STEP, output_interval=0.1,
         record=RECORD + record, metrics=METRICS,
     )
@@ -61,7 +79,7 @@ def _closed_loop(name: str, description: str, estimator: type, parameters: dict,
 
 def yang2020() -> SystemSpec:
     """Seed 003's scenario flown on YangFusionKF's estimate (the default system)."""
-    return _closed_loop(
+    return closed_loop(
         "yang2020",
         "Seed 003 Section 4: climb/cruise/descend flown closed loop on YangFusionKF's "
         "estimate; GPS 30 m / 0.2 m/s at 100 ms, baro 20 m at 10 ms, radio altimeter 10 m at "
@@ -73,9 +91,22 @@ def yang2020() -> SystemSpec:
 
 def yang2020_baseline() -> SystemSpec:
     """The loop of :func:`yang2020` flown on BaselineKF (baro and GPS)."""
-    return _closed_loop(
+    return closed_loop(
         "yang2020_baseline",
         "Seed 003's scenario (see yang2020) flown closed loop on BaselineKF (baro 20 m, "
         "GPS 30 m)",
         BaselineKF, BASELINE,
+    )
+
+
+def yang2020_altitude_ekf() -> SystemSpec:
+    """The loop of :func:`yang2020` flown on AltitudeEKF (every sensor, seed 003's noises)."""
+    return closed_loop(
+        "yang2020_altitude_ekf",
+        "Seed 003's scenario (see yang2020) flown closed loop on AltitudeEKF with seed 003's "
+        "sensor noises (baro 20 m, GPS 30 m / 0.2 m/s, radio altimeter 10 m, accelerometer "
+        "0.01 m/s²)",
+        AltitudeEKF, ALTITUDE_EKF,
+        ("estimator.acc_bias", "estimator.baro_bias", "estimator.terrain_est",
+         "estimator.n_rejected", "estimator.h_valid"),
     )

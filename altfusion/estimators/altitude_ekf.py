@@ -1,0 +1,537 @@
+"""AltitudeEKF: one height filter for any subset of the sensors, after PX4 EKF2's height fusion.
+
+The model, its equations and every deviation from PX4 EKF2 / ArduPilot EKF3 are written up in
+``docs/altitude_ekf.md``; this docstring is the short form.
+
+State x = [h, v, b_a, d, k, t]: height (m, in the datum of the reference source), vertical
+speed (m/s), accelerometer bias (m/s²), the offset d (m) of the non-reference one of baro and
+GNSS, the barometer's scale factor k (1) and the terrain height t (m) under the rangefinders.
+
+Time update over the estimator's step Δ, the accelerometer as input (PX4: the IMU drives the
+prediction), a = acc_z - b_a, acc_z the mean of two samples that bound the step (else the
+latest one, held):
+
+    h⁺ = h + Δ·v + Δ²/2·a,   v⁺ = v + Δ·a,   b_a, d, k, t: random walks
+    Q: white acceleration of PSD acc_noise²·T_acc on (h, v), T_acc the accelerometer's
+       sample period, at least Δ (``accel_psd`` without an accelerometer, whose a is then
+       0); acc_bias_psd, baro_bias_psd, baro_scale_psd and terrain_psd on the others
+       (``height_ref`` "baro" freezes k; "range" freezes t)
+
+Measurements (one scalar update each, Joseph form, ``kalman.update_scalar``), each at its own
+time stamp s ≤ now: the state is taken back by δ = now - s along the model,
+h(s) = h - δ·v + δ²/2·a and v(s) = v - δ·a, and the Jacobian row follows (H F(δ)⁻¹):
+
+    baro (height_ref gps or range):  z = h(s) + d + k·(h(s) - h_c)    (h_c: height at start)
+    baro (height_ref baro):          z = h(s)
+    GNSS height:  z = h(s)  (z = h(s) - d with height_ref baro),
+                  σ = gps_noise·VDOP·√max(1, gps_nsat_ref/N)           (seed 001, eq. 14)
+    GNSS vertical speed:  z = v(s);   radar, laser:  z = h(s) - t
+
+Each sample passes the shared innovation gate (``gate_sigma``, PX4's 5σ) and health logic of
+``estimators/base.py`` (isolation, height reset when every source disagrees); on top, PX4's
+reset to the height reference (a reference that jumped takes the height; one returning
+inconsistent after an outage is not re-admitted) and a terrain reset when a rangefinder stays
+inconsistent while the height is pinned by the others.
+
+Deviations from PX4 EKF2 (reasons in docs/altitude_ekf.md):
+
+* one joint filter on the vertical axis only, with the bias "estimators" (baro/GNSS offset,
+  terrain) as states, instead of EKF2's 24 states and its separate bias filters;
+* samples fused at the estimator's clock with the state taken back to their stamp (exact for
+  the deterministic model, process noise over δ neglected) instead of a delayed fusion
+  horizon and an output predictor;
+* the height-reference fallback needs no switch: a lost source's offset state simply stops
+  being observed and the remaining sources carry the height without a step;
+* the ground-effect dead zone applies within ``ground_effect_height`` of the terrain (or of
+  the starting height), not on a land detector's flag; off by default;
+* optional innovation-based noise adaptation (seed 004): each source's R is scaled by its
+  windowed mean normalized innovation squared, bounded to [1, ``adaptive_max``];
+* the barometer's temperature error (seed 000) is the scale-factor state k, not a
+  temperature model: ``baro_p`` and ``baro_T`` are read but not fused.
+"""
+
+import math
+from dataclasses import dataclass
+
+from altfusion.errors import ParameterError
+from altfusion.estimators.base import (
+    ACC,
+    BARO_ALL,
+    GPS_ALL,
+    LASER,
+    RADAR,
+    Estimator,
+    HealthParams,
+    Status,
+)
+from altfusion.estimators.kalman import update_scalar
+from altfusion.params import param
+
+H, V, BA, D, K, T = range(6)
+"""Indices of the state vector [h, v, b_a, d, k, t]."""
+
+HEIGHT_REFERENCES = ("gps", "baro", "range")
+
+
+@dataclass(frozen=True)
+class AltitudeEKFParams(HealthParams):
+    baro_noise: float = param(2.0, "m", "Baro height noise, 1σ", positive=True)
+    gps_noise: float = param(3.0, "m", "GNSS height noise at VDOP 1 with enough satellites, "
+                                       "1σ (the user range error)", positive=True)
+    gps_vz_noise: float = param(0.5, "m/s", "GNSS vertical-speed noise, 1σ (PX4 "
+                                            "EKF2_GPS_V_NOISE)", positive=True)
+    acc_noise: float = param(0.35, "m/s2", "Accelerometer noise per sample, 1σ (PX4 "
+                                           "EKF2_ACC_NOISE)",
+                             positive=True)
+    radar_noise: float = param(1.0, "m", "Radio-altimeter noise, 1σ", positive=True)
+    laser_noise: float = param(0.1, "m", "Laser-rangefinder noise, 1σ (PX4 EKF2_RNG_NOISE)",
+                               positive=True)
+    accel_psd: float = param(1.0, "m2/s3", "PSD of the white vertical acceleration of the "
+                                           "motion model while no accelerometer is fused",
+                             positive=True)
+    acc_bias_psd: float = param(1e-5, "m2/s5", "PSD of the accelerometer-bias random walk "
+                                               "(PX4 EKF2_ACC_B_NOISE 0.003 m/s³ squared)",
+                                min=0.0)
+    baro_bias_psd: float = param(0.01, "m2/s", "PSD of the random walk of the baro/GNSS "
+                                               "offset d", min=0.0)
+    baro_scale_psd: float = param(1e-9, "1/s", "PSD of the random walk of the baro scale "
+                                               "factor k", min=0.0)
+    terrain_psd: float = param(0.01, "m2/s", "PSD of the terrain-height random walk",
+                               min=0.0)
+    gps_dop_scaling: bool = param(True, None, "Scale the GNSS height noise by VDOP and the "
+                                              "satellite count (seed 001)")
+    gps_nsat_ref: int = param(6, None, "Satellites below which the GNSS noise grows as "
+                                       "√(gps_nsat_ref/N)", min=1)
+    gate_sigma: float = param(5.0, "1", "Innovation gate of every source in standard "
+                                        "deviations (PX4: 5; 0: off)", min=0.0)
+    height_ref: str = param("gps", None, "Height reference: gps (GNSS defines the datum, the "
+                                         "baro gets offset and scale), baro (the baro defines "
+                                         "it, GNSS gets the offset) or range (the terrain "
+                                         "under the first range sample is the datum: held "
+                                         "constant)")
+    laser_max_height: float = param(25.0, "m", "The laser is fused below this range (seed "
+                                               "004: 25 m)", positive=True)
+    radar_max_height: float = param(5000.0, "m", "The radio altimeter is fused below this "
+                                                 "range", positive=True)
+    range_hysteresis: float = param(1.0, "m", "A rangefinder switched off above its "
+                                              "maximum height is used again below it minus "
+                                              "this", min=0.0)
+    ground_effect_deadzone: float = param(0.0, "m", "Negative baro innovations down to this "
+                                                    "are ignored near the ground (PX4 "
+                                                    "EKF2_GND_EFF_DZ; 0: off)", min=0.0)
+    ground_effect_height: float = param(1.0, "m", "Height above the terrain within which the "
+                                                  "ground-effect dead zone applies", min=0.0)
+    adaptive_noise: bool = param(False, None, "Scale each source's R by its windowed mean "
+                                              "normalized innovation squared (seed 004)")
+    adaptive_window: float = param(20.0, "1", "Samples in the exponential window of the "
+                                              "noise adaptation", min=1.0)
+    adaptive_max: float = param(10.0, "1", "Largest factor of the noise adaptation",
+                                min=1.0)
+    acc_timeout: float = param(0.5, "s", "Without an accelerometer sample for this long the "
+                                         "motion model takes over", positive=True)
+    P0_vz: float = param(25.0, "m2/s2", "Initial vertical-speed variance", positive=True)
+    P0_acc_bias: float = param(0.04, "m2/s4", "Initial accelerometer-bias variance",
+                               positive=True)
+    P0_offset: float = param(100.0, "m2", "Variance of the offset d before its source's "
+                                          "first sample", positive=True)
+    P0_scale: float = param(1e-4, "1", "Initial variance of the baro scale factor",
+                            min=0.0)
+    P0_terrain: float = param(100.0, "m2", "Variance of the terrain height before the first "
+                                           "range sample", positive=True)
+    terrain_h: float = param(0.0, "m", "Terrain height before the first range sample (its "
+                                        "prior, of variance P0_terrain)")
+
+
+class AltitudeEKF(Estimator):
+    """Height, vertical speed and the bias states of every sensor in one Kalman filter."""
+
+    Params = AltitudeEKFParams
+    streams = (BARO_ALL, GPS_ALL, RADAR, LASER, ACC)
+
+    def configure(self, clock) -> None:
+        p = self.params
+        if p.height_ref not in HEIGHT_REFERENCES:
+            raise ParameterError("height_ref", p.height_ref,
+                                 f"must be one of {', '.join(HEIGHT_REFERENCES)}")
+
+    def initialize_filter(self) -> None:
+        p = self.params
+        self.x = [0.0, 0.0, 0.0, 0.0, 0.0, p.terrain_h]
+        self.P = [[0.0] * 6 for _ in range(6)]
+        for i, var in ((V, p.P0_vz), (BA, p.P0_acc_bias), (D, p.P0_offset),
+                       (K, 0.0 if p.height_ref == "baro" else p.P0_scale),
+                       (T, p.P0_terrain)):
+            self.P[i][i] = var
+        self._q_rw = [0.0, 0.0, p.acc_bias_psd, p.baro_bias_psd,
+                      0.0 if p.height_ref == "baro" else p.baro_scale_psd,
+                      0.0 if p.height_ref == "range" else p.terrain_psd]
+        self.h_c = 0.0
+        self._acc = None                  # (stamp, value) of the last accelerometer sample
+        self._acc_used = False
+        self._acc_period = 0.0            # between the last two accelerometer samples
+        self._offset_known = False        # d set by its source's first sample
+        self._terrain_known = False
+        self._range_on = {"radar": True, "laser": True}
+        self._range_rejected_since: dict[str, float] = {}
+        self._nis = {}
+        self._reference = "baro" if p.height_ref == "baro" else "gps"
+        self._reference_rejected_since: float | None = None
+        self._reference_sample = (0.0, 0.0, 1.0)       # its last rejected (z, stamp, σ)
+        self._reference_seen = False
+        self.n_terrain_resets = 0
+        self._publish()
+
+    # ------------------------------------------------------------------ time update
+    def propagate(self, dt: float) -> None:
+        """Nothing here: the time update needs this step's accelerometer sample, so it runs
+        first in :meth:`fuse_samples`."""
+
+    def _predict(self, acc_sample) -> None:
+        """x⁺ = F x + B a, P⁺ = F P Fᵀ + Q over one step (written out: F differs from I in
+        the rows of h and v only)."""
+        dt, now, p = self.dt, self.time, self.params
+        previous = self._acc
+        if acc_sample is not None:
+            self._acc = (acc_sample["acc_time"], acc_sample["acc_z"])
+            if previous is not None and self._acc[0] > previous[0]:
+                self._acc_period = min(self._acc[0] - previous[0], p.acc_timeout)
+        acc_on = self._acc is not None and now - self._acc[0] <= p.acc_timeout
+        if acc_on and acc_sample is not None and previous is not None \
+                and previous[0] >= now - dt * (1.0 + 1e-6):
+            a_in = 0.5 * (previous[1] + self._acc[1])    # two samples bound the step
+        else:
+            a_in = self._acc[1] if acc_on else 0.0
+        self._acc_used = acc_on
+        if not self.started:
+            return
+        x, P = self.x, [row[:] for row in self.P]
+        c = 0.5 * dt * dt if acc_on else 0.0              # ∂h⁺/∂(-b_a)
+        e = dt if acc_on else 0.0                         # ∂v⁺/∂(-b_a)
+        a = a_in - x[BA] if acc_on else 0.0
+        x = [x[H] + dt * x[V] + 0.5 * dt * dt * a, x[V] + dt * a, *x[2:]]
+        P[H] = [p0 + dt * p1 - c * p2 for p0, p1, p2 in zip(P[H], P[V], P[BA], strict=True)]
+        P[V] = [p1 - e * p2 for p1, p2 in zip(P[V], P[BA], strict=True)]
+        for row in P:
+            row[H], row[V] = row[H] + dt * row[V] - c * row[BA], row[V] - e * row[BA]
+        q = p.acc_noise**2 * max(dt, self._acc_period) if acc_on else p.accel_psd
+        P[H][H] += q * dt**3 / 3.0
+        P[H][V] += q * dt**2 / 2.0
+        P[V][V] += q * dt
+        for i, psd in enumerate(self._q_rw):
+            P[i][i] += psd * dt
+        for j in range(6):                                # exact symmetry
+            P[j][H], P[j][V] = P[H][j], P[V][j]
+        self.x, self.P = x, P
+
+    # ------------------------------------------------------------------ measurements
+    def fuse_samples(self, samples) -> None:
+        self._predict(samples.get(ACC))
+        if ACC in samples:
+            self.accept("acc")
+        gps = samples.get(GPS_ALL)
+        if gps is not None:
+            self._fuse_height("gps", gps["gps_h"], gps["gps_time"], self._gps_sigma(gps))
+            if self.started:
+                self._fuse_speed(gps["gps_vz"], gps["gps_time"])
+        baro = samples.get(BARO_ALL)
+        if baro is not None:
+            self._fuse_height("baro", baro["baro_h"], baro["baro_time"], self.params.baro_noise)
+        for name, stream, sigma in (("radar", RADAR, self.params.radar_noise),
+                                    ("laser", LASER, self.params.laser_noise)):
+            sample = samples.get(stream)
+            if sample is not None and self._range_in_use(name, sample[f"{name}_h"]):
+                self._fuse_height(name, sample[f"{name}_h"], sample[f"{name}_time"], sigma)
+        self._publish()
+
+    def _gps_sigma(self, sample) -> float:
+        """σ_G = gps_noise·VDOP·√max(1, N_ref/N) (seed 001's η; VDOP or N not given: 1)."""
+        p = self.params
+        if not p.gps_dop_scaling:
+            return p.gps_noise
+        vdop = sample["gps_vdop"] if sample["gps_vdop"] > 0.0 else 1.0
+        nsat = sample["gps_nsat"]
+        return p.gps_noise * vdop * math.sqrt(max(1.0, p.gps_nsat_ref / nsat)
+                                              if nsat > 0 else 1.0)
+
+    def _range_in_use(self, name: str, reading: float) -> bool:
+        """A rangefinder is fused below its maximum height, with hysteresis."""
+        p = self.params
+        top = p.laser_max_height if name == "laser" else p.radar_max_height
+        on = self._range_on[name]
+        on = reading <= top if on else reading <= top - p.range_hysteresis
+        if on != self._range_on[name]:
+            self.note(f"{name}: {'used' if on else 'not used'} at a reading of {reading:.3g} m")
+            self._range_on[name] = on
+        return on
+
+    def _back(self, stamp: float) -> tuple[float, float, list[tuple[int, float]], float]:
+        """The state taken back to ``stamp``: h(s), v(s), the Jacobian row of h(s) on the
+        present state, and δ (≥ 0: a sample is never fused before its stamp)."""
+        delta = max(0.0, self.time - stamp)
+        x = self.x
+        if delta == 0.0:
+            return x[H], x[V], [(H, 1.0)], 0.0
+        a = (self._acc[1] - x[BA]) if self._acc_used else 0.0
+        row = [(H, 1.0), (V, -delta)]
+        if self._acc_used:
+            row.append((BA, -0.5 * delta * delta))
+        return x[H] - delta * x[V] + 0.5 * delta * delta * a, x[V] - delta * a, row, delta
+
+    def _model(self, source: str, h_s: float, row_h) -> tuple[float, list[tuple[int, float]]]:
+        """The predicted measurement of a height source and its Jacobian row."""
+        x, ref = self.x, self.params.height_ref
+        if source in ("radar", "laser"):
+            return h_s - x[T], [*row_h, (T, -1.0)]
+        if source == "baro" and ref != "baro":
+            scale = 1.0 + x[K]
+            return (h_s + x[D] + x[K] * (h_s - self.h_c),
+                    [*((i, scale * c) for i, c in row_h), (D, 1.0), (K, h_s - self.h_c)])
+        if source == "gps" and ref == "baro":
+            return h_s - x[D], [*row_h, (D, -1.0)]
+        return h_s, list(row_h)
+
+    def _fuse_height(self, source: str, z: float, stamp: float, sigma: float) -> None:
+        if not self.started:
+            self._start(source, z, sigma)
+            return
+        if self._first_sample(source, z, sigma):
+            return
+        h_s, _, row_h, _ = self._back(stamp)
+        predicted, row = self._model(source, h_s, row_h)
+        y = z - predicted
+        R = sigma * sigma * self._adaptation(source)
+        if source == "baro":
+            y = self._ground_effect(y)
+        S = sum(c * sum(c2 * self.P[i][j] for j, c2 in row) for i, c in row) + R
+        if source in ("radar", "laser") and self._terrain_step(source, z, y, S):
+            return
+        if source == self._reference and self.params.height_ref != "range":
+            if self._reference_step(source, y, S):
+                return
+            self._reference_sample = (z, stamp, sigma)
+        elif self._reference_first(y, S):
+            self._fuse_height(source, z, stamp, sigma)     # sets its offset anew
+            return
+        if not self.gate(source, y, S, self.params.gate_sigma):
+            return
+        self._range_rejected_since.pop(source, None)
+        if source == self._reference:
+            self._reference_rejected_since = None
+        self._adapt(source, y * y / S)
+        self.x, self.P, _ = update_scalar(self.x, self.P, row, y, R)
+
+    def _fuse_speed(self, vz: float, stamp: float) -> None:
+        _, v_s, _, delta = self._back(stamp)
+        row = [(V, 1.0)]
+        if delta > 0.0 and self._acc_used:
+            row.append((BA, delta))
+        R = self.params.gps_vz_noise ** 2
+        y = vz - v_s
+        S = self.P[V][V] + (2.0 * delta * self.P[V][BA] + delta * delta * self.P[BA][BA]
+                            if len(row) > 1 else 0.0) + R
+        if self.gate("gps_vz", y, S, self.params.gate_sigma):
+            self.x, self.P, _ = update_scalar(self.x, self.P, row, y, R)
+
+    def _ground_effect(self, y: float) -> float:
+        """PX4's ground-effect dead zone: near the ground a negative baro innovation down to
+        ``ground_effect_deadzone`` is ignored (the rotor wash lowers the static pressure)."""
+        p = self.params
+        ground = self.x[T] if self._terrain_known else self.h_c
+        if p.ground_effect_deadzone > 0.0 and self.x[H] - ground <= p.ground_effect_height \
+                and y < 0.0:
+            return min(0.0, y + p.ground_effect_deadzone)
+        return y
+
+    def _terrain_step(self, source: str, z: float, y: float, S: float) -> bool:
+        """Range consistency: a rangefinder rejected for ``reset_timeout`` while the height is
+        aided by others has seen the terrain change (a step, a box): the terrain resets
+        onto it (counted in ``n_terrain_resets``). True if it did."""
+        p = self.params
+        if p.gate_sigma <= 0.0 or y * y <= p.gate_sigma**2 * S:
+            return False
+        since = self._range_rejected_since.setdefault(source, self.time)
+        if self.time - since < p.reset_timeout or not self.contradicted(source, y):
+            return False
+        self._range_rejected_since.pop(source)
+        self.x[T] -= y
+        self.P = [[0.0 if (i == T) != (j == T) else pij for j, pij in enumerate(row)]
+                  for i, row in enumerate(self.P)]
+        self.P[T][T] = 0.0 if p.height_ref == "range" else S
+        self.n_terrain_resets += 1
+        self.note(f"{source}: inconsistent for {p.reset_timeout:g} s while the height is "
+                  f"aided: terrain reset by {-y:.3g} m")
+        self.accept(source)
+        return True
+
+    def _reference_step(self, source: str, y: float, S: float) -> bool:
+        """PX4's reset to the height reference: the reference source, fused until its
+        samples jumped, rejected for ``reset_timeout``, takes the height with it (the other
+        sources' offsets are learnt anew), unless another source fused within
+        ``reset_timeout`` pins the height tighter than the jump (``contradicted``): then the
+        reference is the faulty one and is isolated (the fault suite's gnss_step). A
+        reference returning inconsistent after an outage (not fused for ``reset_timeout``
+        before its first rejection) is not re-admitted: it stays rejected and, contradicted
+        by the sources that carried the height, isolated.
+        True if the height was reset."""
+        p = self.params
+        if not p.fault_detection or p.gate_sigma <= 0.0 or y * y <= p.gate_sigma**2 * S:
+            return False
+        now = self.time
+        if self._reference_rejected_since is None:
+            in_use = now - self._last_fused.get(source, -math.inf) <= p.reset_timeout
+            self._reference_rejected_since = now if in_use else math.inf
+        if now - self._reference_rejected_since < p.reset_timeout \
+                or self.contradicted(source, y):
+            return False
+        self._reset_to_reference(y, S)
+        return True
+
+    def _reference_first(self, y: float, S: float) -> bool:
+        """With every height source rejected for ``reset_timeout`` (the base's height reset)
+        while the reference delivers, the height resets onto the reference's last sample,
+        not onto whichever source comes first (PX4 *AllHgtFailReset). True if it did."""
+        p = self.params
+        since = self._reference_rejected_since
+        if not (p.fault_detection and since is not None and math.isfinite(since)
+                and self.time - self._last_aiding >= p.reset_timeout
+                and y * y > p.gate_sigma**2 * S):
+            return False
+        z, stamp, sigma = self._reference_sample
+        h_s, _, row_h, _ = self._back(stamp)
+        predicted, row = self._model(self._reference, h_s, row_h)
+        S_ref = sum(c * sum(c2 * self.P[i][j] for j, c2 in row) for i, c in row) + sigma**2
+        self._reset_to_reference(z - predicted, S_ref)
+        return True
+
+    def _reset_to_reference(self, y: float, S: float) -> None:
+        source = self._reference
+        self._reference_rejected_since = None
+        self.reset_height(source, y, S)
+        self.n_height_resets += 1
+        self._step_flags |= Status.HEIGHT_RESET
+        self.note(f"{source}: the height reference rejected for "
+                  f"{self.params.reset_timeout:g} s; height reset by {y:.4g} m to it "
+                  f"(reset {self.n_height_resets})")
+        self.accept(source)
+
+    def _adaptation(self, source: str) -> float:
+        """The factor on R of seed 004's bounded innovation-based adaptation (1: off)."""
+        if not self.params.adaptive_noise:
+            return 1.0
+        return min(max(self._nis.get(source, 1.0), 1.0), self.params.adaptive_max)
+
+    def _adapt(self, source: str, nis: float) -> None:
+        if self.params.adaptive_noise:
+            w = 1.0 / self.params.adaptive_window
+            self._nis[source] = (1.0 - w) * self._nis.get(source, 1.0) + w * nis * \
+                self._adaptation(source)
+
+    # ------------------------------------------------------------------ start and resets
+    def _start(self, source: str, z: float, sigma: float) -> None:
+        """The first height sample starts the filter: h = z minus the source's offset (0),
+        with the offset's prior variance in Var h and their correlation."""
+        x, P = self.x, self.P
+        R = sigma * sigma
+        offset = {"radar": T, "laser": T}.get(source)
+        if (source == "baro") != (self.params.height_ref == "baro"):
+            offset = D
+        x[H] = z
+        P[H][H] = R
+        if offset == T and self.params.height_ref == "range":
+            P[T][T] = 0.0                                 # the terrain is the datum
+        if offset is not None:
+            sign = -1.0 if source == "baro" else 1.0   # h = z - d (baro), z + d, z + t
+            x[H] = z + sign * x[offset]
+            P[H][H] += P[offset][offset]
+            P[H][offset] = P[offset][H] = sign * P[offset][offset]
+            if offset == T:
+                self._terrain_known = True
+            else:
+                self._offset_known = True
+        self.h_c = x[H]
+        self._reference_seen = source == self._reference
+        self.started = True
+        self.accept(source)
+
+    def _first_sample(self, source: str, z: float, sigma: float) -> bool:
+        """The first sample of the reference after a start from another source: see
+        :meth:`_first_reference`. The first sample of the source of d, or of a rangefinder,
+        that disagrees with the
+        state's prior (``P0_offset``, ``P0_terrain``: beyond the gate) sets its offset state
+        (d = z - h or t = h - z, uncorrelated, Var = Var h + R) and is consumed; one that
+        agrees is fused as any sample (a calibrated baro, a known terrain). With
+        ``height_ref`` range the first range sample always sets the terrain, which is the
+        datum from then on (variance 0). True if consumed."""
+        if source == self._reference and not self._reference_seen:
+            self._reference_seen = True
+            return self._first_reference(z, sigma)
+        is_offset = (source == "baro") != (self.params.height_ref == "baro") \
+            and source in ("baro", "gps")
+        if is_offset and not self._offset_known:
+            index, value = D, (z - self.x[H]) * (1.0 if source == "baro" else -1.0)
+            self._offset_known = True
+        elif source in ("radar", "laser") and not self._terrain_known:
+            index, value = T, self.x[H] - z
+            self._terrain_known = True
+        else:
+            return False
+        sigmas = self.params.gate_sigma
+        y = value - self.x[index]                         # against the state's prior
+        frozen = index == T and self.params.height_ref == "range"
+        if not frozen and y * y <= sigmas * sigmas * (self.P[index][index] + self.P[H][H]
+                                                      + sigma * sigma):
+            return False                                  # consistent: fused as any sample
+        self.x[index] = value
+        for j in range(6):
+            self.P[index][j] = self.P[j][index] = 0.0
+        self.P[index][index] = 0.0 if frozen else self.P[H][H] + sigma * sigma
+        self.accept(source)
+        return True
+
+    def _first_reference(self, z: float, sigma: float) -> bool:
+        """The reference's first sample after a start from another source sets the datum:
+        if it disagrees with the height (beyond the gate), h moves onto it and d and t move
+        with it, so that the other sources' predictions stay where they were (a lidar at
+        0 m, then GNSS at 429 m MSL: the terrain becomes 429 m - range); the sample is then
+        fused as any other (so its information reaches the terrain through h). Returns
+        False: the sample is never consumed."""
+        h_s, _, row_h, _ = self._back(self.time)
+        predicted, row = self._model(self._reference, h_s, row_h)
+        y = z - predicted
+        S = sum(c * sum(c2 * self.P[i][j] for j, c2 in row) for i, c in row) + sigma**2
+        if y * y <= self.params.gate_sigma**2 * S:
+            return False
+        self.x[H] += y
+        self.x[D] += y if self.params.height_ref == "baro" else -y
+        self.x[T] += y
+        self.note(f"{self._reference}: first sample of the height reference {y:.4g} m from "
+                  f"the height: datum moved onto it")
+        return False                                      # then fused, in agreement
+
+    def reset_height(self, source: str, innovation: float, variance: float) -> None:
+        """Height (or, for the GNSS speed, the speed) onto the sample; its variance the
+        innovation's, its correlations zero (PX4's height and velocity resets). After a
+        height reset the offset d and the terrain are set anew by their sources' next
+        samples, unless the reset was onto that source."""
+        i = V if source == "gps_vz" else H
+        self.x[i] += innovation
+        for j in range(6):
+            self.P[i][j] = self.P[j][i] = 0.0
+        self.P[i][i] = variance
+        if i == H:                        # the other sources' offsets: learnt anew
+            owner = "gps" if self.params.height_ref == "baro" else "baro"
+            self._offset_known = self._offset_known and source == owner
+            self._terrain_known = self._terrain_known and source in ("radar", "laser")
+        self._publish()
+
+    def _publish(self) -> None:
+        x, P, ref = self.x, self.P, self.params.height_ref
+        self.h_est, self.vz_est = x[H], x[V]
+        self.h_std = math.sqrt(max(P[H][H], 0.0))
+        self.vz_std = math.sqrt(max(P[V][V], 0.0))
+        self.acc_bias = x[BA]
+        self.baro_bias = x[D] if ref != "baro" else 0.0
+        self.gps_bias = x[D] if ref == "baro" else 0.0
+        self.baro_scale = x[K]
+        self.terrain_est = x[T]
+        self.terrain_std = math.sqrt(max(P[T][T], 0.0))

@@ -1,0 +1,296 @@
+"""AltitudeEKF's core: PX4 EKF2's height-fusion cases (test_EKF_height_fusion.cpp) and the
+fault suite's criteria, on a synthetic hover fed as the sensor FMUs feed it.
+
+The flight: a hover at 10 m (truth constant, speed 0), the estimator stepped every 0.02 s;
+accelerometer every step (σ 0.05 m/s²), baro every step (σ 0.5 m), GNSS every 0.1 s
+(σ 0.3 m, VDOP 1, 10 satellites, vertical speed σ 0.1 m/s), laser every step (σ 0.01 m)
+where a case uses it. Seeds are fixed; tolerances are stated with the statistics they come
+from.
+"""
+
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from altfusion.errors import ParameterError
+from altfusion.estimators.altitude_ekf import AltitudeEKF
+from altfusion.estimators.base import SourceBit, source_bit
+
+sys.path.insert(0, str(Path(__file__).parent))
+from stream_feeder import StreamFeeder  # noqa: E402
+
+STEP = 0.02
+TRUE_H = 10.0
+NOISE = {"baro_noise": 0.5, "gps_noise": 0.3, "gps_vz_noise": 0.1, "acc_noise": 0.05,
+         "laser_noise": 0.01}
+
+
+class Flight:
+    """A seeded hover: ``fly(seconds, baro=..., gps=..., ...)`` with each sensor's error
+    (None: the sensor delivers nothing)."""
+
+    def __init__(self, seed: int = 1, **params):
+        self.ekf = AltitudeEKF(AltitudeEKF.Params(**{**NOISE, **params}), step_size=STEP)
+        self.feed = StreamFeeder(self.ekf)
+        self.rng = np.random.default_rng(seed)
+        self.t = 0.0
+
+    def fly(self, seconds: float, baro=0.0, gps=0.0, laser=None, acc_bias=0.0,
+            record=None) -> None:
+        n = self.feed.n
+        for _ in range(round(seconds / STEP)):
+            r = self.rng.standard_normal(5)
+            samples = {"acc": {"acc_z": acc_bias + 0.05 * r[0]}}
+            if baro is not None:
+                samples["baro"] = {"baro_h": TRUE_H + baro + 0.5 * r[1], "baro_p": 1e5,
+                                   "baro_T": 288.0}
+            if gps is not None and n % 5 == 4:
+                samples["gps"] = {"gps_h": TRUE_H + gps + 0.3 * r[2], "gps_vz": 0.1 * r[3],
+                                  "gps_vdop": 1.0, "gps_nsat": 10, "gps_fix": True}
+            if laser is not None:
+                samples["laser"] = {"laser_h": TRUE_H - laser + 0.01 * r[4],
+                                    "laser_valid": True}
+            self.feed.step(**samples)
+            n += 1
+            if record is not None:
+                record.append((self.ekf.time, self.ekf.h_est, self.ekf.h_std,
+                               self.ekf.h_valid, self.ekf.status))
+
+    def isolated(self, source: str) -> bool:
+        return bool(self.ekf.status & source_bit(source, SourceBit.ISOLATED))
+
+
+def test_nominal_hover_is_accurate_and_honest():
+    """Baro + GNSS + accelerometer: the error is within the filter's 2σ 85-99.5 % of the time
+    (3000 correlated samples: the band is the fault suite's criterion)."""
+    flight, rows = Flight(), []
+    flight.fly(10.0)
+    flight.fly(60.0, record=rows)
+    err = np.array([r[1] - TRUE_H for r in rows])
+    std = np.array([r[2] for r in rows])
+    assert np.sqrt(np.mean(err**2)) < 0.3          # below the GNSS's 0.3 m alone
+    assert 0.85 <= np.mean(np.abs(err) <= 2 * std) <= 0.995
+    assert all(r[3] for r in rows)
+
+
+def test_baro_step_is_isolated_and_gnss_carries_the_height():
+    """PX4 baro jump: +200 m on the baro; the baro is isolated within 10 s and the height
+    stays within 3x its nominal error (nominal RMS < 0.3 m: 1 m)."""
+    flight, rows = Flight(), []
+    flight.fly(20.0)
+    flight.fly(10.0, baro=200.0, record=rows)
+    assert flight.isolated("baro")
+    assert max(abs(r[1] - TRUE_H) for r in rows) < 1.0
+    assert flight.ekf.n_height_resets == 0
+
+
+def test_reference_step_resets_the_height_to_it_when_nothing_contradicts_it():
+    """PX4 (gnss step with gpsRef): GNSS, the reference and the only height source, jumps by
+    100 m and stays there: the height follows it after reset_timeout, with exactly one
+    reset."""
+    flight = Flight()
+    flight.fly(20.0, baro=None)
+    flight.fly(10.0, baro=None, gps=100.0)
+    assert flight.ekf.n_height_resets == 1
+    assert abs(flight.ekf.h_est - (TRUE_H + 100.0)) < 1.0
+
+
+@pytest.mark.parametrize("height_ref", ["gps", "baro"])
+def test_a_jumping_reference_contradicted_by_another_source_is_isolated(height_ref):
+    """The fault suite's gnss_step, PX4's baro jump with baroRef: the reference jumps by
+    100 m while the other source pins the height tighter: the reference is isolated within
+    10 s, no reset, and the height stays (within 1 m: 3x its nominal error)."""
+    flight, rows = Flight(height_ref=height_ref), []
+    flight.fly(20.0)
+    reference = "gps" if height_ref == "gps" else "baro"
+    flight.fly(10.0, **{reference: 100.0}, record=rows)
+    assert flight.isolated(reference)
+    assert flight.ekf.n_height_resets == 0
+    assert max(abs(r[1] - TRUE_H) for r in rows) < 1.0
+
+
+def test_all_height_sources_fail_one_reset_within_0_2_m():
+    """PX4 gpsRefAllHgtFailReset: GNSS +10 m and baro +5 m together: exactly one height
+    reset, onto the GNSS; 10 s later the height is within 0.2 m of the GNSS (its mean over
+    100 samples has σ 0.03 m: 0.2 m is 6σ)."""
+    flight = Flight()
+    flight.fly(20.0)
+    flight.fly(10.0, baro=5.0, gps=10.0)
+    assert flight.ekf.n_height_resets == 1
+    assert abs(flight.ekf.h_est - (TRUE_H + 10.0)) < 0.2
+
+
+@pytest.mark.parametrize("height_ref", ["gps", "baro"])
+def test_fail_over_keeps_the_height_until_every_source_is_lost(height_ref):
+    """PX4 baroRefFailOver / gpsRefFailOver: GNSS stops, then the baro, then the laser; each
+    time the remaining sources carry the height without a step (within 3x the nominal
+    error of the remaining source, 0.5 m), and h_valid turns false within aiding_timeout
+    of losing the last one."""
+    flight, rows = Flight(height_ref=height_ref), []
+    flight.fly(20.0, laser=0.0)
+    flight.fly(20.0, gps=None, laser=0.0, record=rows)
+    flight.fly(20.0, gps=None, baro=None, laser=0.0, record=rows)
+    assert max(abs(r[1] - TRUE_H) for r in rows) < 0.5
+    assert all(r[3] for r in rows)
+    rows.clear()
+    flight.fly(10.0, gps=None, baro=None, laser=None, record=rows)
+    invalid = [r[0] for r in rows if not r[3]]
+    assert invalid and invalid[0] - 60.0 <= flight.ekf.params.aiding_timeout + STEP
+    assert not rows[-1][3]
+
+
+def test_gnss_returning_inconsistent_is_not_readmitted():
+    """PX4 gpsRefDeadReckoningStopRestartInconsistent: GNSS lost for 10 min, the baro carries
+    the height; GNSS returns 50 m off: it is never fused again and the baro offset stays
+    where it was (within 0.5 m: the baro's offset is not moved by rejected samples)."""
+    flight = Flight()
+    flight.fly(20.0)
+    flight.fly(600.0, gps=None)
+    offset = flight.ekf.baro_bias
+    flight.fly(30.0, gps=50.0)
+    assert flight.ekf.n_height_resets == 0
+    assert flight.isolated("gps")
+    assert abs(flight.ekf.baro_bias - offset) < 0.5
+    assert abs(flight.ekf.h_est - TRUE_H) < 1.0
+
+
+def test_silent_sensors_turn_h_valid_false_within_aiding_timeout():
+    flight, rows = Flight(), []
+    flight.fly(10.0)
+    flight.fly(8.0, baro=None, gps=None, record=rows)
+    first_invalid = next(r[0] for r in rows if not r[3])
+    assert 10.0 + 5.0 - STEP <= first_invalid <= 10.0 + 5.0 + STEP
+
+
+def test_accelerometer_bias_learnt_to_0_03_in_60_s():
+    """PX4 test_EKF_accelerometer: a 0.2 m/s² bias is learnt to ±0.03 m/s² within 60 s."""
+    flight = Flight()
+    flight.fly(60.0, acc_bias=0.2)
+    assert abs(flight.ekf.acc_bias - 0.2) < 0.03
+
+
+def test_late_and_early_samples_give_the_on_time_estimate():
+    """A climb at 2 m/s, GNSS every 0.1 s and the accelerometer every step. The same GNSS
+    samples delivered one step late with their true stamps (a Jacobi master) or one step
+    early, stamped ahead (ECOS: held until due), give the on-time estimate: early ones
+    exactly (fused at the same step), late ones up to the process noise over one step
+    neglected in taking the state back (measured 3e-4 m after 10 s; bound 1 mm; fusing a
+    late sample at the clock's time instead would be off by v·Δt = 4 cm)."""
+    def run(shift: int) -> list[float]:
+        ekf = AltitudeEKF(AltitudeEKF.Params(**NOISE), step_size=STEP)
+        feed, rng, out = StreamFeeder(ekf), np.random.default_rng(7), []
+        acc, noise = 0.05 * rng.standard_normal(1500), 0.3 * rng.standard_normal(1500)
+        gps = {n + shift: {"gps_h": 2.0 * ekf.clock.time(n + 1) + noise[n], "gps_vz": 2.0,
+                           "gps_vdop": 1.0, "gps_nsat": 10, "gps_fix": True,
+                           "gps_time": ekf.clock.time(n + 1)}      # the instant sampled
+               for n in range(4, 1500, 5)}
+        for n in range(1500):
+            feed.step(acc={"acc_z": acc[n]}, gps=gps.get(n))
+            out.append(ekf.h_est)
+        return out
+
+    on_time, late, early = (np.array(run(shift)) for shift in (0, 1, -1))
+    assert np.array_equal(early[10:], on_time[10:])
+    every_second = slice(500, None, 5)   # both runs fused the same; after the first 10 s,
+    # where the start (one step later when late) and the large P of the start dominate
+    assert np.max(np.abs(late[every_second] - on_time[every_second])) < 1e-3
+
+
+def test_rangefinder_switches_with_hysteresis_and_resets_on_a_terrain_step():
+    """The laser is fused below laser_max_height only, back again below it minus the
+    hysteresis; over a 3 m box (terrain step) it is inconsistent, and after reset_timeout
+    the terrain resets once onto it while the height stays with baro and GNSS."""
+    flight = Flight(laser_max_height=5.0, range_hysteresis=1.0)
+    flight.fly(10.0, laser=0.0)                       # reads 10 m: above 5 m, not used
+    assert not flight.ekf.status & source_bit("laser", SourceBit.FUSED)
+    flight = Flight()
+    flight.fly(20.0, laser=0.0)
+    assert flight.ekf.status & source_bit("laser", SourceBit.FUSED)
+    flight.fly(10.0, laser=3.0)
+    assert flight.ekf.n_terrain_resets == 1
+    assert abs(flight.ekf.terrain_est - 3.0) < 0.1
+    assert abs(flight.ekf.h_est - TRUE_H) < 0.3
+
+
+def test_gnss_noise_scales_with_vdop_and_satellites():
+    """σ_G = gps_noise·VDOP·√max(1, N_ref/N) (seed 001)."""
+    ekf = AltitudeEKF(AltitudeEKF.Params(gps_noise=2.0, gps_nsat_ref=6))
+    assert ekf._gps_sigma({"gps_vdop": 1.5, "gps_nsat": 9}) == pytest.approx(3.0)
+    assert ekf._gps_sigma({"gps_vdop": 4.0, "gps_nsat": 5}) == pytest.approx(
+        8.0 * math.sqrt(6 / 5))
+
+
+@pytest.mark.parametrize("name, value", [("height_ref", "sonar"), ("baro_noise", -1.0),
+                                         ("gate_sigma", -5.0), ("adaptive_max", 0.5)])
+def test_invalid_parameters_are_refused_naming_them(name, value):
+    with pytest.raises(ParameterError, match=name):
+        AltitudeEKF(AltitudeEKF.Params(**{name: value}))
+
+
+def test_a_start_on_the_rangefinder_takes_the_gnss_datum_when_gnss_comes():
+    """Started by a lidar reading 10 m (terrain unknown, prior 0 m), the filter meets its
+    reference, GNSS at 410 m MSL: the datum moves onto GNSS and the terrain with it (400 m),
+    nothing is isolated and no height reset is counted (a replayed PX4 log starts so)."""
+    flight = Flight()
+    flight.fly(2.0, baro=None, gps=None, laser=0.0)
+    flight.fly(10.0, baro=None, gps=400.0, laser=0.0)
+    assert abs(flight.ekf.h_est - 410.0) < 0.1
+    assert abs(flight.ekf.terrain_est - 400.0) < 0.1
+    assert not flight.isolated("gps") and not flight.isolated("laser")
+    assert flight.ekf.n_height_resets == 0
+
+
+def test_height_ref_range_holds_the_ground_under_the_first_range_sample():
+    """height_ref range: the terrain under the first range sample is the datum (held
+    constant), so a GNSS 2 m off moves neither the terrain nor the height, which follows
+    the laser (h - terrain within 5 cm of the laser's truth: 5 laser σ), where with
+    height_ref gps the reference takes the height (reset to it) and the terrain moves with
+    it."""
+    ends = {}
+    for ref in ("range", "gps"):
+        flight = Flight(height_ref=ref)
+        flight.fly(10.0, laser=0.0)
+        terrain = flight.ekf.terrain_est
+        flight.fly(60.0, laser=0.0, gps=2.0)
+        ends[ref] = (flight.ekf.terrain_est - terrain, flight.ekf.h_est - TRUE_H, terrain)
+    assert ends["range"][0] == 0.0 and abs(ends["range"][1] - ends["range"][2]) < 0.05
+    assert ends["gps"][0] > 1.0
+
+
+def test_ground_effect_dead_zone_ignores_negative_baro_innovations_near_the_ground():
+    """PX4 EKF2_GND_EFF_DZ: within ground_effect_height of the ground a baro reading 1.5 m
+    low (rotor wash; within its gate) is ignored within a 4 m dead zone: the baro offset
+    does not move (less than 0.1 m in the second it lasts); without the dead zone the
+    offset takes the 1.5 m (more than 0.3 m of it within the second). The height stays with
+    the GNSS either way."""
+    moved = {}
+    for deadzone in (0.0, 4.0):
+        flight = Flight(ground_effect_deadzone=deadzone, ground_effect_height=20.0)
+        flight.fly(10.0)
+        offset = flight.ekf.baro_bias
+        flight.fly(1.0, baro=-1.5)
+        moved[deadzone] = flight.ekf.baro_bias - offset
+        assert abs(flight.ekf.h_est - TRUE_H) < 0.3
+    assert abs(moved[4.0]) < 0.1
+    assert moved[0.0] < -0.3
+
+
+def test_noise_adaptation_is_bounded_and_weights_a_noisy_source_down():
+    """Seed 004's adaptation (adaptive_noise), gates off as in seed 004: a baro 10x
+    noisier than its nominal 0.5 m, the only height source, is weighted down (the height
+    error is smaller than without adaptation) and the factor on R never exceeds
+    adaptive_max."""
+    rms = {}
+    for adaptive in (False, True):
+        flight = Flight(seed=5, adaptive_noise=adaptive, adaptive_max=100.0, gate_sigma=0.0)
+        flight.fly(10.0)
+        rows = []
+        noisy = flight.rng.standard_normal(1500) * 5.0
+        for k in range(1500):                     # the baro alone: no GNSS
+            flight.fly(STEP, baro=noisy[k], gps=None, record=rows)
+        rms[adaptive] = float(np.sqrt(np.mean([(r[1] - TRUE_H) ** 2 for r in rows])))
+        assert flight.ekf._adaptation("baro") <= 100.0
+    assert rms[True] < 0.7 * rms[False]
