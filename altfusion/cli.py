@@ -4,6 +4,7 @@ import argparse
 import math
 import os
 import sys
+from dataclasses import replace
 from pathlib import Path
 from typing import NoReturn
 
@@ -36,6 +37,8 @@ def command_run(args: argparse.Namespace) -> int:
     from altfusion.summary import format_summary
 
     loaded = read_ssp(args.system)
+    if args.fault is not None:
+        loaded = apply_fault(args.system, loaded, args.fault)
     settings = parse_settings(loaded, args.set)
     spec = loaded.spec
     out = output_folder(args.out)
@@ -62,6 +65,20 @@ def command_run(args: argparse.Namespace) -> int:
               f"(marked {INCOMPLETE}): {one_line(failure)}", file=sys.stderr)
         return 1
     return 0
+
+
+def apply_fault(ssp: Path, loaded: LoadedSystem, fault: str) -> LoadedSystem:
+    """``loaded`` with fault scenario ``fault`` inserted, its SensorFaults FMU taken from the
+    SSP or found next to it; ValueError for an unknown fault or one the system cannot take."""
+    from altfusion.montecarlo.swap import find_fmu
+    from altfusion.systems.faults import FAULT_COMPONENT, FAULT_FMU, with_fault
+
+    spec = with_fault(loaded.spec, fault)
+    located = find_fmu(FAULT_COMPONENT, FAULT_FMU, ssp, loaded.fmu_paths)
+    fmu_paths = dict(loaded.fmu_paths)
+    if located.path is not None:
+        fmu_paths[located.fmu] = located.path
+    return replace(loaded, spec=spec, fmu_paths=fmu_paths)
 
 
 def command_replay(args: argparse.Namespace) -> int:
@@ -133,6 +150,8 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--out", default="results", help="output folder (default: results)")
     run.add_argument("--backend", choices=("fmu", "core"), default="fmu",
                      help="step the FMUs (default) or their core objects directly")
+    run.add_argument("--fault", default=None, metavar="NAME",
+                     help="apply fault scenario NAME of the fault suite (docs/faults.md)")
     run.set_defaults(handler=command_run)
     replay = commands.add_parser(
         "replay", help="run estimators on a PX4 flight log (ULog), compare with PX4 EKF2")

@@ -71,9 +71,10 @@ def test_default_gains_are_the_python_control_pole_placement():
 # feedforward tracks them to about 1e-4 m; 'hajiyev' levels off with a step in vz_ref
 # (-4.2 m/s to 0) and 'table' has corners: both overshoot by up to about 1 m.
 BOUNDS = {"yang2020": 1e-3, "whang2008": 1e-3, "xu_hover15": 1e-3, "xu_hover35": 1e-3,
-          "xu_multipoint": 1e-3, "hold": 1e-9, "hajiyev": 1.0, "table": 0.2}
+          "xu_multipoint": 1e-3, "fault_flight": 1e-3, "hold": 1e-9, "hajiyev": 1.0,
+          "table": 0.2}
 DURATIONS = {"yang2020": 420, "whang2008": 600, "xu_hover15": 120, "xu_hover35": 120,
-             "xu_multipoint": 1000, "hold": 60, "hajiyev": 1600, "table": 100}
+             "xu_multipoint": 1000, "fault_flight": 300, "hold": 60, "hajiyev": 1600, "table": 100}
 
 
 @pytest.mark.parametrize("name", PROFILE_NAMES)

@@ -68,7 +68,7 @@ def command_mc(args: argparse.Namespace) -> int:
     from altfusion.montecarlo.tables import format_statistics
 
     out = Path(args.out or Path("results") / "mc" / args.system.stem)
-    source = SystemSource.from_path(args.system)
+    source = SystemSource.from_path(args.system, fault=args.fault)
     if args.run is not None:
         return _rerun(args, source, out)
     outcome = run_campaign(source, out, _settings(args), _execution(args), resume=args.resume)
@@ -172,6 +172,9 @@ def add_commands(commands) -> None:
     _campaign_options(mc)
     mc.add_argument("--out", default=None,
                     help="campaign folder (default: results/mc/<system>)")
+    mc.add_argument("--fault", default=None, metavar="NAME",
+                    help="apply fault scenario NAME of the fault suite (docs/faults.md) to "
+                         "every run")
     mc.add_argument("--run", type=int, default=None, metavar="I",
                     help="re-run run I alone (settings from --out's campaign if there is one) "
                          "and check it against the stored run")

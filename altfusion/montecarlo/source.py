@@ -1,12 +1,14 @@
 """The system a campaign runs, as every worker process loads it: an SSP archive identified by
-its content hash, optionally with one component's FMU swapped (``altfusion compare``)."""
+its content hash, optionally with one component's FMU swapped (``altfusion compare``) and a
+fault scenario inserted (``altfusion mc --fault``)."""
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from altfusion.cosim.ssp import LoadedSystem, read_ssp
 from altfusion.cosim.system import SystemSpec
-from altfusion.montecarlo.swap import Swap, SwapEffect, file_sha256, swap_component
+from altfusion.montecarlo.swap import Swap, SwapEffect, file_sha256, find_fmu, swap_component
+from altfusion.systems.faults import FAULT_COMPONENT, FAULT_FMU, with_fault
 
 
 class CampaignError(RuntimeError):
@@ -15,7 +17,9 @@ class CampaignError(RuntimeError):
 
 @dataclass(frozen=True)
 class SystemSource:
-    """An SSP archive (absolute path, SHA-256 of its bytes) and an optional FMU swap.
+    """An SSP archive (absolute path, SHA-256 of its bytes), an optional FMU swap and an
+    optional fault scenario (a name of :data:`altfusion.systems.faults.FAULTS`) with the
+    SensorFaults FMU that applies it (``fault_fmu``, found like a swapped FMU).
 
     Workers (local processes or Dask workers) read the archive from ``ssp``: on a cluster it
     must be on a file system every worker sees, at the same path.
@@ -24,19 +28,31 @@ class SystemSource:
     ssp: Path
     sha256: str
     swap: Swap | None = None
+    fault: str | None = None
+    fault_fmu: Swap | None = None
 
     @classmethod
-    def from_path(cls, ssp: Path, swap: Swap | None = None) -> "SystemSource":
+    def from_path(cls, ssp: Path, swap: Swap | None = None,
+                  fault: str | None = None) -> "SystemSource":
+        """The source of ``ssp``; with ``fault``, the scenario is checked against the system
+        (ValueError) and the SensorFaults FMU located (SwapError if there is none)."""
         ssp = Path(ssp).resolve()
         if not ssp.is_file():
             raise CampaignError(f"no SSP archive at {ssp}")
-        return cls(ssp, file_sha256(ssp), swap)
+        source = cls(ssp, file_sha256(ssp), swap)
+        if fault is None:
+            return source
+        loaded = read_ssp(ssp)
+        with_fault(loaded.spec, fault)
+        located = find_fmu(FAULT_COMPONENT, FAULT_FMU, ssp, loaded.fmu_paths)
+        return replace(source, fault=fault, fault_fmu=located)
 
     @property
     def key(self) -> tuple:
         """What identifies the simulated system (for caches and manifests)."""
         return (str(self.ssp), self.sha256, self.swap.sha256 if self.swap else None,
-                self.swap.component if self.swap else None)
+                self.swap.component if self.swap else None, self.fault,
+                self.fault_fmu.sha256 if self.fault_fmu else None)
 
 
 @dataclass
@@ -64,4 +80,11 @@ def load_system(source: SystemSource) -> PreparedSystem:
         if source.swap.path is not None and file_sha256(source.swap.path) != source.swap.sha256:
             raise CampaignError(f"{source.swap.path} changed since the campaign started")
         spec, fmu_paths, effect = swap_component(spec, fmu_paths, source.swap)
+    if source.fault is not None and source.fault_fmu is not None:
+        located = source.fault_fmu
+        if located.path is not None:
+            if file_sha256(located.path) != located.sha256:
+                raise CampaignError(f"{located.path} changed since the campaign started")
+            fmu_paths[located.fmu] = located.path
+        spec = with_fault(spec, source.fault)
     return PreparedSystem(spec, fmu_paths, effect, loaded)

@@ -15,6 +15,8 @@ name               trajectory
 ``xu_hover15``     seed 004 Section 3.1: take off to 15 m and hover
 ``xu_hover35``     seed 004 Section 3.1: take off to 35 m and hover
 ``xu_multipoint``  seed 004 Section 3.2: hover at 10 m, 22 m, 37 m within 1000 s
+``fault_flight``   the fault suite's generic flight: take off at 5 s to 15 m and hover, climb
+                   at 60 s to 120 m and cruise, descend at 200 s and land at 264 s
 ``hold``           hold the offset altitude
 ``table``          user table 't h; t h; ...' (s, m), linear between points
 =================  ===========================================================================
@@ -143,8 +145,8 @@ class TableProfile(Profile):
 
 
 PROFILE_NAMES = (
-    "yang2020", "hajiyev", "whang2008", "xu_hover15", "xu_hover35", "xu_multipoint", "hold",
-    "table",
+    "yang2020", "hajiyev", "whang2008", "xu_hover15", "xu_hover35", "xu_multipoint",
+    "fault_flight", "hold", "table",
 )
 
 
@@ -165,6 +167,9 @@ def make_profile(name: str, offset: float = 0.0, table: str = "") -> Profile:
         return trapezoid_moves(offset, [(5.0, offset + 35.0)], xu_accel, xu_speed)
     if name == "xu_multipoint":
         moves = [(5.0, offset + 10.0), (335.0, offset + 22.0), (665.0, offset + 37.0)]
+        return trapezoid_moves(offset, moves, xu_accel, xu_speed)
+    if name == "fault_flight":
+        moves = [(5.0, offset + 15.0), (60.0, offset + 120.0), (200.0, offset)]
         return trapezoid_moves(offset, moves, xu_accel, xu_speed)
     if name == "hold":
         return AccelerationSegments(offset, [])

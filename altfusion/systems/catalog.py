@@ -1,10 +1,12 @@
 """The catalog of systems: name -> function building its :class:`SystemSpec`."""
 
 from collections.abc import Callable
+from dataclasses import replace
 
 from altfusion.cosim.system import Metric, SystemSpec
 from altfusion.replay.system import LOGS, catalog_replay
 from altfusion.systems.bao2017 import bao2017
+from altfusion.systems.faults import fault_flight, with_fault
 from altfusion.systems.hajiyev import hajiyev, hajiyev_drift
 from altfusion.systems.plant import plant_components, plant_connections
 from altfusion.systems.sensors import SEED_003_SENSORS, sensor_components, sensor_connections
@@ -59,6 +61,12 @@ def sensors_yang2020() -> SystemSpec:
     )
 
 
+def fault_flight_baro_step() -> SystemSpec:
+    """The fault suite's flight with the barometer failing by +200 m at 130 s (the
+    SensorFaults FMU's reference run)."""
+    return replace(with_fault(fault_flight(), "baro_step"), name="fault_flight_baro_step")
+
+
 SYSTEMS: dict[str, Callable[[], SystemSpec]] = {
     "plant_yang2020": plant_yang2020,
     **{name: (lambda name=name: catalog_replay(name)) for name in LOGS},
@@ -74,6 +82,8 @@ SYSTEMS: dict[str, Callable[[], SystemSpec]] = {
     "xu2016_hover35": xu2016_hover35,
     "xu2016_multipoint": xu2016_multipoint,
     "xu2016_multipoint_wind": xu2016_multipoint_wind,
+    "fault_flight": fault_flight,
+    "fault_flight_baro_step": fault_flight_baro_step,
 }
 
 DEFAULT_SYSTEM = "yang2020"
