@@ -21,7 +21,6 @@ import numpy as np
 from altfusion.atomic import atomic_write, write_text
 from altfusion.cosim.ssp import write_ssp
 from altfusion.montecarlo.evaluate_metrics import (
-    Fault,
     RunMetrics,
     Series,
     Summary,
@@ -113,17 +112,6 @@ def scenario_json(scenario: Scenario) -> dict[str, Any]:
     """A scenario's description as stored in ``scenario.json`` (JSON-ready)."""
     data = dataclasses.asdict(scenario)
     return json.loads(json.dumps(data))
-
-
-def read_scenario(folder: Path) -> Scenario:
-    """The scenario stored in ``folder/scenario.json`` (its system omitted: read the SSP)."""
-    data = json.loads((Path(folder) / SCENARIO).read_text())
-    fault = Fault(data["fault"]["start"], tuple(data["fault"]["faulty"]),
-                  data["fault"]["transient"]) if data["fault"] else None
-    return dataclasses.replace(
-        Scenario(data["name"], data["description"], None, data["truth"], data["components"],
-                 data["not_applicable"], fault, data["nominal"], data["stop_time"],
-                 data["note"]))
 
 
 def prepare_scenario(scenario: Scenario, fmu_paths: dict[str, Path], out: Path,

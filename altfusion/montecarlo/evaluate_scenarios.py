@@ -211,14 +211,16 @@ class Scenario:
     """Why the flight is shortened, or other choices."""
 
 
-def _record(components: dict[str, str], truth: str) -> tuple[tuple[str, ...], tuple[Metric, ...]]:
+def record_estimators(components: dict[str, str], truth: str,
+                      ) -> tuple[tuple[str, ...], tuple[Metric, ...]]:
+    """The truth and each estimator's recorded outputs; one error metric per estimator."""
     record = (truth,) + tuple(f"{c}.{name}" for c in components.values() for name in RECORDED)
     metrics = tuple(Metric(f"{name} error", f"{c}.h_est", truth)
                     for name, c in components.items())
     return record, metrics
 
 
-def _connections(estimator: EstimatorInfo, component: str, sources: dict[str, str]):
+def sensor_inputs(estimator: EstimatorInfo, component: str, sources: dict[str, str]):
     """The estimator's inputs from the sensors the system has (the others stay unconnected:
     their streams never deliver a sample)."""
     present = set(sources.values())
@@ -255,10 +257,10 @@ def paper_scenario(name: str, estimators: dict[str, EstimatorInfo],
         components[estimator.name] = estimator.name
         added.append(ComponentSpec(estimator.name, estimator.name, own.step_size,
                                    noise_parameters(estimator, noise)))
-        connections.extend(_connections(estimator, estimator.name, sources))
+        connections.extend(sensor_inputs(estimator, estimator.name, sources))
     if own.fmu not in chosen:
         components.pop(own.fmu, None)
-    record, metrics = _record(components, truth)
+    record, metrics = record_estimators(components, truth)
     kept = tuple(c for c in spec.components if c.name not in dropped)
     spec = replace(
         spec, name=f"evaluate_{name}",

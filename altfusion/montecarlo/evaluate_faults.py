@@ -1,0 +1,80 @@
+"""The fault scenarios of ``altfusion evaluate``: the fault suite's generic flight
+(:func:`altfusion.systems.faults.fault_flight`) without a fault (``nominal_flight``, the
+nominal RMS of each estimator) and with each fault of :data:`~altfusion.systems.faults.FAULTS`.
+
+The flight is closed on the true altitude, so every estimator is an observer: each is a
+component named after its FMU, connected by contract names to the five sensors, given the
+flight's true sensor noise (the flight's own choices for the estimators it knows, then
+:func:`~.evaluate_scenarios.noise_parameters`). An estimator reading none of the sensors a
+fault needs (``FaultScenario.needs``) is n/a for that fault: the fault tells nothing about it.
+"""
+
+from dataclasses import replace
+from pathlib import Path
+
+from altfusion.cosim.system import ComponentSpec
+from altfusion.montecarlo.evaluate_metrics import Fault
+from altfusion.montecarlo.evaluate_scenarios import (
+    EstimatorInfo,
+    Scenario,
+    noise_parameters,
+    not_applicable,
+    record_estimators,
+    sensor_inputs,
+    sensor_noise,
+    sensor_sources,
+)
+from altfusion.systems.faults import FAULTS, TRUE_NOISE, fault_flight, with_fault
+
+NOMINAL = "nominal_flight"
+"""The fault flight without a fault."""
+
+TRUTH = "plant.h"
+
+
+def fault_names() -> list[str]:
+    """The fault scenarios: the nominal flight, then the suite's faults in its order."""
+    return [NOMINAL, *FAULTS]
+
+
+def _flight(estimators: dict[str, EstimatorInfo], fmu_paths: dict[str, Path],
+            selected: list[str], needs: tuple[str, ...] = ()) -> Scenario:
+    spec = fault_flight(estimators=())
+    sources = sensor_sources(spec)
+    noise = sensor_noise(spec, fmu_paths)
+    components, missing, added, connections = {}, {}, [], []
+    for estimator in (estimators[name] for name in selected):
+        reason = not_applicable(estimator, set(sources), needs)
+        if reason:
+            missing[estimator.name] = reason
+            continue
+        components[estimator.name] = estimator.name
+        parameters = {**TRUE_NOISE.get(estimator.name, {}),
+                      **noise_parameters(estimator, noise)}
+        added.append(ComponentSpec(estimator.name, estimator.name, spec.base_step, parameters))
+        connections.extend(sensor_inputs(estimator, estimator.name, sources))
+    record, metrics = record_estimators(components, TRUTH)
+    spec = replace(spec, name="evaluate_fault_flight",
+                   components=spec.components + tuple(added),
+                   connections=spec.connections + tuple(connections),
+                   record=record, metrics=metrics)
+    return Scenario(NOMINAL, "The fault suite's flight without a fault: " + spec.description,
+                    spec, TRUTH, components, missing)
+
+
+def nominal_scenario(estimators: dict[str, EstimatorInfo], fmu_paths: dict[str, Path],
+                     selected: list[str]) -> Scenario:
+    """The fault flight without a fault."""
+    return _flight(estimators, fmu_paths, selected)
+
+
+def fault_scenario(name: str, estimators: dict[str, EstimatorInfo],
+                   fmu_paths: dict[str, Path], selected: list[str]) -> Scenario:
+    """The fault flight with fault ``name``; its nominal RMS comes from :data:`NOMINAL`."""
+    fault = FAULTS[name]
+    flight = _flight(estimators, fmu_paths, selected, fault.needs)
+    spec = with_fault(flight.spec, name)
+    spec = replace(spec, name=f"evaluate_{name}", record=flight.spec.record)
+    return replace(flight, name=name, description=f"{fault.description} ({fault.origin})",
+                   spec=spec, fault=Fault(fault.start, fault.faulty, fault.transient),
+                   nominal=NOMINAL)
