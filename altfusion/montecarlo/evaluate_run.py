@@ -11,6 +11,7 @@ records the settings; ``--resume`` checks them and completes the missing runs.
 import dataclasses
 import json
 import math
+import os
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -18,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from altfusion.atomic import atomic_write, write_text
+from altfusion.atomic import write_text
 from altfusion.cosim.ssp import write_ssp
 from altfusion.montecarlo.evaluate_metrics import (
     RunMetrics,
@@ -128,16 +129,17 @@ def prepare_scenario(scenario: Scenario, fmu_paths: dict[str, Path], out: Path,
                                   f"{scenario.name} (the system or the estimators changed): "
                                   f"evaluate into a new --out")
     else:
-        atomic_write(ssp, lambda handle: _write_ssp(scenario, fmu_paths, handle))
+        _write_ssp(scenario, fmu_paths, ssp)
         write_text(stored, description)
     return SystemSource.from_path(ssp, backend=backend)
 
 
-def _write_ssp(scenario: Scenario, fmu_paths: dict[str, Path], handle) -> None:
-    temporary = Path(handle.name).with_suffix(".building.ssp")
+def _write_ssp(scenario: Scenario, fmu_paths: dict[str, Path], path: Path) -> None:
+    """Write the SSP under a temporary name in its folder, then rename it into place."""
+    temporary = path.with_name(f".{path.name}.tmp")
     try:
         write_ssp(scenario.spec, fmu_paths, temporary)
-        handle.write(temporary.read_bytes())
+        os.replace(temporary, path)
     finally:
         temporary.unlink(missing_ok=True)
 
