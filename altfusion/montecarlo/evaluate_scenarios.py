@@ -44,7 +44,7 @@ from altfusion.systems.wiring import EXTRA_SOURCES, SENSOR_OF_PREFIX, estimator_
 PAPER_ESTIMATOR = "estimator"
 """The component of a paper system that runs the paper's estimator."""
 
-PAPER_SCENARIOS = ("whang2008", "bao2017", "hajiyev_drift", "yang2020", "xu2016_hover15",
+PAPER_SCENARIOS = ("whang2008", "bao2017", "hajiyev", "hajiyev_drift", "yang2020", "xu2016_hover15",
                    "xu2016_hover35")
 """The paper systems evaluated (see docs/evaluation.md for the choice)."""
 
@@ -140,7 +140,7 @@ def not_applicable(estimator: EstimatorInfo, sources: set[str], fault_needs: tup
     return None
 
 
-def _sensor_params(spec: SystemSpec, component: str, fmu_paths: dict[str, Path]) -> Any:
+def sensor_params(spec: SystemSpec, component: str, fmu_paths: dict[str, Path]) -> Any:
     """The sensor core's parameters of ``component`` (its defaults with the bound values)."""
     spec_component = spec.component(component)
     params_class = core_class(fmu_paths[spec_component.fmu]).Params
@@ -158,9 +158,9 @@ def sensor_noise(spec: SystemSpec, fmu_paths: dict[str, Path]) -> dict[str, floa
     sensors = sensor_sources(spec)
     noise: dict[str, float] = {}
     if "baro" in sensors:
-        noise["baro_noise"] = _sensor_params(spec, sensors["baro"], fmu_paths).height_noise_std
+        noise["baro_noise"] = sensor_params(spec, sensors["baro"], fmu_paths).height_noise_std
     if "gps" in sensors:
-        p = _sensor_params(spec, sensors["gps"], fmu_paths)
+        p = sensor_params(spec, sensors["gps"], fmu_paths)
         white = p.user_range_error * p.vdop * math.sqrt(max(1.0, p.nsat_reference
                                                             / max(p.nsat, 1)))
         noise["gps_noise"] = math.hypot(white, p.gm_std)
@@ -168,7 +168,7 @@ def sensor_noise(spec: SystemSpec, fmu_paths: dict[str, Path]) -> dict[str, floa
     for source, name in (("acc", "acc_noise"), ("radar", "radar_noise"),
                          ("laser", "laser_noise")):
         if source in sensors:
-            noise[name] = _sensor_params(spec, sensors[source], fmu_paths).noise_std
+            noise[name] = sensor_params(spec, sensors[source], fmu_paths).noise_std
     return noise
 
 
