@@ -44,9 +44,9 @@ from altfusion.systems.wiring import EXTRA_SOURCES, SENSOR_OF_PREFIX, estimator_
 PAPER_ESTIMATOR = "estimator"
 """The component of a paper system that runs the paper's estimator."""
 
-PAPER_SCENARIOS = ("whang2008", "bao2017", "hajiyev", "hajiyev_drift", "yang2020", "xu2016_hover15",
-                   "xu2016_hover35")
-"""The paper systems evaluated (see docs/evaluation.md for the choice)."""
+PAPER_SCENARIOS = ("whang2008", "bao2017", "hajiyev", "hajiyev_drift", "yang2020",
+                   "xu2016_hover15", "xu2016_hover35")
+"""The paper systems evaluated (docs/montecarlo.md says why these)."""
 
 RECORDED = ("h_est", "h_std", "h_valid", "status")
 """What is recorded of every estimator."""
