@@ -114,3 +114,23 @@ def test_an_unknown_estimator_or_scenario_is_refused_naming_the_known_ones(fmus,
     assert "unknown estimators NoSuchKF; known:" in completed.stderr
     assert "BaselineKF" in completed.stderr
     assert not (tmp_path / "x").exists()
+
+
+def test_fault_scenarios_put_the_fault_between_sensors_and_every_estimator(fmus):
+    from altfusion.montecarlo.evaluate_run import plan_evaluation
+
+    scenarios, estimators, _ = plan_evaluation(MODELS, None, ["baro_step", "range_terrain"])
+    by_name = {s.name: s for s in scenarios}
+    assert list(by_name) == ["baro_step", "range_terrain", "nominal_flight"]  # nominal added
+    step = by_name["baro_step"]
+    assert step.fault.faulty == ("baro",) and step.nominal == "nominal_flight"
+    assert step.stop_time == pytest.approx(130.0 + 40.0 + 60.0)
+    assert set(step.components) == set(estimators)
+    for name in estimators:
+        feeds = {c.start for c in step.spec.connections if c.end == f"{name}.baro_h"}
+        assert feeds == {"fault.baro_h"}, name
+    assert step.spec.component("BaselineKF").parameters["R_baro"] == pytest.approx(20.0**2)
+    # range_terrain needs the laser: an estimator that does not read it is n/a.
+    assert "laser" in by_name["range_terrain"].not_applicable["BaselineKF"]
+    assert by_name["nominal_flight"].fault is None
+    assert "fault" not in {c.name for c in by_name["nominal_flight"].spec.components}
