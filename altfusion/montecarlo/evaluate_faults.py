@@ -12,7 +12,7 @@ Rate (:data:`STEP`): the evaluation flies the flight's plant block as it is (100
 samples the barometer, accelerometer and laser at 20 Hz instead of 100 Hz and steps the
 estimators and the fault component at 0.05 s (GNSS 10 Hz and radio altimeter 5 Hz as in the
 flight). Each estimator's cost is per step and per fused sample, so this divides the suite's
-cost by about four (``benchmarks/RESULTS.md``), which ``altfusion evaluate --runs 20`` needs
+cost by about three (``benchmarks/RESULTS.md``), which ``altfusion evaluate --runs 20`` needs
 to finish within 30 minutes on two cores. 20 Hz is the rate PX4 logs its barometer at (the
 replayed flights), the faults act over seconds, and the noise per sample is unchanged.
 
