@@ -14,6 +14,7 @@ from altfusion.cosim.settings import parse_settings
 from altfusion.cosim.ssp import LoadedSystem, read_ssp
 from altfusion.errors import ParameterError, UsageError
 from altfusion.montecarlo.commands import add_commands as add_montecarlo_commands
+from altfusion.montecarlo.evaluate_command import add_command as add_evaluate_command
 from altfusion.replay.system import CATALOG_ESTIMATORS
 
 INCOMPLETE = ".incomplete"
@@ -173,6 +174,7 @@ def build_parser() -> argparse.ArgumentParser:
                                  help="print the FlightController design (poles, margins)")
     design.set_defaults(handler=command_controller_design)
     add_montecarlo_commands(commands)
+    add_evaluate_command(commands)
     from altfusion.reproduce import REPRODUCTIONS
 
     reproduce = commands.add_parser("reproduce",

@@ -19,7 +19,9 @@ class CampaignError(RuntimeError):
 class SystemSource:
     """An SSP archive (absolute path, SHA-256 of its bytes), an optional FMU swap and an
     optional fault scenario (a name of :data:`altfusion.systems.faults.FAULTS`) with the
-    SensorFaults FMU that applies it (``fault_fmu``, found like a swapped FMU).
+    SensorFaults FMU that applies it (``fault_fmu``, found like a swapped FMU), and the runner
+    backend: "fmu" (FMI calls, the default) or "core" (the FMUs' core objects stepped
+    in-process: the same numbers without the FMI overhead; ``altfusion evaluate``).
 
     Workers (local processes or Dask workers) read the archive from ``ssp``: on a cluster it
     must be on a file system every worker sees, at the same path.
@@ -30,16 +32,17 @@ class SystemSource:
     swap: Swap | None = None
     fault: str | None = None
     fault_fmu: Swap | None = None
+    backend: str = "fmu"
 
     @classmethod
     def from_path(cls, ssp: Path, swap: Swap | None = None,
-                  fault: str | None = None) -> "SystemSource":
+                  fault: str | None = None, backend: str = "fmu") -> "SystemSource":
         """The source of ``ssp``; with ``fault``, the scenario is checked against the system
         (ValueError) and the SensorFaults FMU located (SwapError if there is none)."""
         ssp = Path(ssp).resolve()
         if not ssp.is_file():
             raise CampaignError(f"no SSP archive at {ssp}")
-        source = cls(ssp, file_sha256(ssp), swap)
+        source = cls(ssp, file_sha256(ssp), swap, backend=backend)
         if fault is None:
             return source
         loaded = read_ssp(ssp)
@@ -52,7 +55,7 @@ class SystemSource:
         """What identifies the simulated system (for caches and manifests)."""
         return (str(self.ssp), self.sha256, self.swap.sha256 if self.swap else None,
                 self.swap.component if self.swap else None, self.fault,
-                self.fault_fmu.sha256 if self.fault_fmu else None)
+                self.fault_fmu.sha256 if self.fault_fmu else None, self.backend)
 
 
 @dataclass

@@ -38,7 +38,7 @@ def simulation_for(source: SystemSource) -> Simulation:
     if cached is None:
         try:
             prepared = load_system(source)
-            cached = (prepared, Simulation(prepared.spec, prepared.fmu_paths))
+            cached = (prepared, Simulation(prepared.spec, prepared.fmu_paths, source.backend))
         except Exception as error:
             _FAILURES[source.key] = error
             raise

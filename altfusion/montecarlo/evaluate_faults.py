@@ -1,0 +1,133 @@
+"""The fault scenarios of ``altfusion evaluate``: the fault suite's generic flight
+(:func:`altfusion.systems.faults.fault_flight`) without a fault (``nominal_flight``, the
+nominal RMS of each estimator) and with each fault of :data:`~altfusion.systems.faults.FAULTS`.
+
+The flight is closed on the true altitude, so every estimator is an observer: each is a
+component named after its FMU, connected by contract names to the five sensors, given the
+flight's true sensor noise (the flight's own choices for the estimators it knows, then
+:func:`~.evaluate_scenarios.noise_parameters`). An estimator reading none of the sensors a
+fault needs (``FaultScenario.needs``) is n/a for that fault: the fault tells nothing about it.
+
+Rate (:data:`STEP`): the evaluation flies the flight's plant block as it is (100 Hz) but
+samples the barometer, accelerometer and laser at 20 Hz instead of 100 Hz and steps the
+estimators and the fault component at 0.05 s (GNSS 10 Hz and radio altimeter 5 Hz as in the
+flight). Each estimator's cost is per step and per fused sample, so this divides the suite's
+cost by about three (``benchmarks/RESULTS.md``), which ``altfusion evaluate --runs 20`` needs
+to finish within 30 minutes on two cores. 20 Hz is the rate PX4 logs its barometer at (the
+replayed flights), the faults act over seconds, and the noise per sample is unchanged.
+
+Length: a fault that starts in flight (``start`` > 0) is flown until :data:`AFTER_TRANSIENT`
+after its transient (isolation and recovery are assessed within the transient, 10 s + 30 s
+in the suite; the minute after gives the coverage once the fault is handled); a fault from
+the start (ground effect, prop wash, weather, sample stamps, acc_bias with its clipping
+episode at 150 s) flies the whole flight, as does the nominal flight.
+"""
+
+from dataclasses import replace
+from pathlib import Path
+
+from altfusion.cosim.system import ComponentSpec, SystemSpec
+from altfusion.montecarlo.evaluate_metrics import Fault
+from altfusion.montecarlo.evaluate_scenarios import (
+    EstimatorInfo,
+    Scenario,
+    noise_parameters,
+    not_applicable,
+    record_estimators,
+    sensor_inputs,
+    sensor_noise,
+    sensor_params,
+    sensor_sources,
+)
+from altfusion.systems.faults import (
+    FAULT_COMPONENT,
+    FAULTS,
+    TRUE_NOISE,
+    fault_flight,
+    with_fault,
+)
+
+STEP = 0.05
+"""Step of the sensors, estimators and fault component of the evaluation's flight and its
+fastest sample period, s."""
+
+AFTER_TRANSIENT = 60.0
+"""Seconds flown after the transient of a fault that starts in flight."""
+
+NOMINAL = "nominal_flight"
+"""The fault flight without a fault."""
+
+TRUTH = "plant.h"
+
+
+def fault_names() -> list[str]:
+    """The fault scenarios: the nominal flight, then the suite's faults in its order."""
+    return [NOMINAL, *FAULTS]
+
+
+def at_step(spec: SystemSpec, step: float, fmu_paths: dict[str, Path],
+            slowed: set[str]) -> SystemSpec:
+    """``spec`` with the components ``slowed`` stepped, and its sensors sampling, no faster
+    than ``step``."""
+    sensors = set(sensor_sources(spec).values())
+    components = []
+    for component in spec.components:
+        if component.name in slowed:
+            parameters = dict(component.parameters)
+            if component.name in sensors and \
+                    sensor_params(spec, component.name, fmu_paths).sample_period < step:
+                parameters["sample_period"] = step
+            component = replace(component, step_size=max(component.step_size, step),
+                                parameters=parameters)
+        components.append(component)
+    return replace(spec, components=tuple(components))
+
+
+def _flight(estimators: dict[str, EstimatorInfo], fmu_paths: dict[str, Path],
+            selected: list[str], needs: tuple[str, ...] = ()) -> Scenario:
+    spec = fault_flight(estimators=())
+    sources = sensor_sources(spec)
+    spec = at_step(spec, STEP, fmu_paths, set(sources.values()))
+    noise = sensor_noise(spec, fmu_paths)
+    components, missing, added, connections = {}, {}, [], []
+    for estimator in (estimators[name] for name in selected):
+        reason = not_applicable(estimator, set(sources), needs)
+        if reason:
+            missing[estimator.name] = reason
+            continue
+        components[estimator.name] = estimator.name
+        parameters = {**TRUE_NOISE.get(estimator.name, {}),
+                      **noise_parameters(estimator, noise)}
+        added.append(ComponentSpec(estimator.name, estimator.name, STEP, parameters))
+        connections.extend(sensor_inputs(estimator, estimator.name, sources))
+    record, metrics = record_estimators(components, TRUTH)
+    spec = replace(spec, name="evaluate_fault_flight",
+                   components=spec.components + tuple(added),
+                   connections=spec.connections + tuple(connections),
+                   record=record, metrics=metrics)
+    return Scenario(NOMINAL, "The fault suite's flight without a fault: " + spec.description,
+                    spec, TRUTH, components, missing)
+
+
+def nominal_scenario(estimators: dict[str, EstimatorInfo], fmu_paths: dict[str, Path],
+                     selected: list[str]) -> Scenario:
+    """The fault flight without a fault."""
+    return _flight(estimators, fmu_paths, selected)
+
+
+def fault_scenario(name: str, estimators: dict[str, EstimatorInfo],
+                   fmu_paths: dict[str, Path], selected: list[str]) -> Scenario:
+    """The fault flight with fault ``name``; its nominal RMS comes from :data:`NOMINAL`."""
+    fault = FAULTS[name]
+    flight = _flight(estimators, fmu_paths, selected, fault.needs)
+    spec = with_fault(flight.spec, name)
+    spec = at_step(replace(spec, name=f"evaluate_{name}", record=flight.spec.record), STEP,
+                   fmu_paths, {FAULT_COMPONENT})
+    stop = None
+    if fault.start > 0.0 and fault.start + fault.transient + AFTER_TRANSIENT < spec.stop_time:
+        stop = fault.start + fault.transient + AFTER_TRANSIENT
+    return replace(flight, name=name, description=f"{fault.description} ({fault.origin})",
+                   spec=spec, fault=Fault(fault.start, fault.faulty, fault.transient),
+                   nominal=NOMINAL, stop_time=stop,
+                   note=f"Flown to {stop:g} s, {AFTER_TRANSIENT:g} s after the fault's "
+                        f"transient." if stop else "")
