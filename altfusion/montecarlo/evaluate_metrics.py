@@ -28,11 +28,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from altfusion import scores
 from altfusion.estimators.base import SourceBit, Status, source_bit
+from altfusion.scores import RECOVERY_FACTOR
 
-COVERAGE_SIGMAS = 2.0
-RECOVERY_FACTOR = 3.0
-"""The error is back when within this many times the nominal RMS (fault suite)."""
 RECOVERY_WINDOW = 2.0
 """Seconds of the trailing RMS the recovery looks at: a single noise sample beyond 3x the
 nominal RMS (0.27 % of Gaussian samples) is no failure to recover; 2 s of them are."""
@@ -86,20 +85,19 @@ def max_abs(series: Series) -> float:
     return float(np.max(np.abs(error))) if error.size else math.nan
 
 
-def outside_transient(time: np.ndarray, fault: Fault | None) -> np.ndarray:
-    """Rows outside the fault transient [start, start + transient)."""
+def transient_windows(fault: Fault | None) -> tuple[tuple[float, float], ...]:
+    """The fault transient [start, start + transient) as :mod:`altfusion.scores` windows."""
     if fault is None or fault.transient <= 0.0:
-        return np.ones(time.shape, dtype=bool)
-    return (time < fault.start) | (time >= fault.start + fault.transient)
+        return ()
+    return ((fault.start, fault.start + fault.transient),)
 
 
 def coverage(series: Series, fault: Fault | None = None) -> float:
-    """Fraction of initialized rows outside the transient with |e| <= 2 h_std."""
-    rows = series.initialized & outside_transient(series.time, fault)
-    if not rows.any():
-        return math.nan
-    error, h_std = series.error[rows], series.h_std[rows]
-    return float(np.mean(np.abs(error) <= COVERAGE_SIGMAS * h_std))
+    """Fraction of initialized rows outside the transient with |e| <= 2 h_std
+    (:func:`altfusion.scores.coverage` over the initialized rows: an estimate declared
+    invalid still claims its h_std here)."""
+    return scores.coverage(series.time, series.error, series.h_std,
+                           valid=series.initialized, excluded=transient_windows(fault))
 
 
 def valid_fraction(series: Series) -> float:
