@@ -8,13 +8,12 @@ flight's true sensor noise (the flight's own choices for the estimators it knows
 :func:`~.evaluate_scenarios.noise_parameters`). An estimator reading none of the sensors a
 fault needs (``FaultScenario.needs``) is n/a for that fault: the fault tells nothing about it.
 
-Rate (:data:`STEP`): the evaluation flies the flight's plant block as it is (100 Hz) but
-samples the barometer, accelerometer and laser at 20 Hz instead of 100 Hz and steps the
-estimators and the fault component at 0.05 s (GNSS 10 Hz and radio altimeter 5 Hz as in the
-flight). Each estimator's cost is per step and per fused sample, so this divides the suite's
-cost by about three (``benchmarks/RESULTS.md``), which ``altfusion evaluate --runs 20`` needs
-to finish within 30 minutes on two cores. 20 Hz is the rate PX4 logs its barometer at (the
-replayed flights), the faults act over seconds, and the noise per sample is unchanged.
+Rate: the flight's own (:func:`~altfusion.systems.faults.fault_flight`: plant, fast
+sensors, fault component and estimators at 20 Hz, GNSS 10 Hz, radio altimeter 5 Hz); every
+estimator is stepped at the flight's base step. Each estimator's cost is per step and per fused
+sample: at 100 Hz the suite would not let ``altfusion evaluate --runs 20`` finish within 30
+minutes on two cores (``benchmarks/RESULTS.md``). 20 Hz is the rate PX4 logs its barometer
+at (the replayed flights), the faults act over seconds, and the noise per sample is unchanged.
 
 Length: a fault that starts in flight (``start`` > 0) is flown until :data:`AFTER_TRANSIENT`
 after its transient (isolation and recovery are assessed within the transient, 10 s + 30 s
@@ -26,7 +25,7 @@ episode at 150 s) flies the whole flight, as does the nominal flight.
 from dataclasses import replace
 from pathlib import Path
 
-from altfusion.cosim.system import ComponentSpec, SystemSpec
+from altfusion.cosim.system import ComponentSpec
 from altfusion.montecarlo.evaluate_metrics import Fault
 from altfusion.montecarlo.evaluate_scenarios import (
     EstimatorInfo,
@@ -36,20 +35,14 @@ from altfusion.montecarlo.evaluate_scenarios import (
     record_estimators,
     sensor_inputs,
     sensor_noise,
-    sensor_params,
     sensor_sources,
 )
 from altfusion.systems.faults import (
-    FAULT_COMPONENT,
     FAULTS,
     TRUE_NOISE,
     fault_flight,
     with_fault,
 )
-
-STEP = 0.05
-"""Step of the sensors, estimators and fault component of the evaluation's flight and its
-fastest sample period, s."""
 
 AFTER_TRANSIENT = 60.0
 """Seconds flown after the transient of a fault that starts in flight."""
@@ -65,29 +58,10 @@ def fault_names() -> list[str]:
     return [NOMINAL, *FAULTS]
 
 
-def at_step(spec: SystemSpec, step: float, fmu_paths: dict[str, Path],
-            slowed: set[str]) -> SystemSpec:
-    """``spec`` with the components ``slowed`` stepped, and its sensors sampling, no faster
-    than ``step``."""
-    sensors = set(sensor_sources(spec).values())
-    components = []
-    for component in spec.components:
-        if component.name in slowed:
-            parameters = dict(component.parameters)
-            if component.name in sensors and \
-                    sensor_params(spec, component.name, fmu_paths).sample_period < step:
-                parameters["sample_period"] = step
-            component = replace(component, step_size=max(component.step_size, step),
-                                parameters=parameters)
-        components.append(component)
-    return replace(spec, components=tuple(components))
-
-
 def _flight(estimators: dict[str, EstimatorInfo], fmu_paths: dict[str, Path],
             selected: list[str], needs: tuple[str, ...] = ()) -> Scenario:
     spec = fault_flight(estimators=())
     sources = sensor_sources(spec)
-    spec = at_step(spec, STEP, fmu_paths, set(sources.values()))
     noise = sensor_noise(spec, fmu_paths)
     components, missing, added, connections = {}, {}, [], []
     for estimator in (estimators[name] for name in selected):
@@ -98,7 +72,8 @@ def _flight(estimators: dict[str, EstimatorInfo], fmu_paths: dict[str, Path],
         components[estimator.name] = estimator.name
         parameters = {**TRUE_NOISE.get(estimator.name, {}),
                       **noise_parameters(estimator, noise)}
-        added.append(ComponentSpec(estimator.name, estimator.name, STEP, parameters))
+        added.append(ComponentSpec(estimator.name, estimator.name, spec.base_step,
+                                   parameters))
         connections.extend(sensor_inputs(estimator, estimator.name, sources))
     record, metrics = record_estimators(components, TRUTH)
     spec = replace(spec, name="evaluate_fault_flight",
@@ -120,9 +95,8 @@ def fault_scenario(name: str, estimators: dict[str, EstimatorInfo],
     """The fault flight with fault ``name``; its nominal RMS comes from :data:`NOMINAL`."""
     fault = FAULTS[name]
     flight = _flight(estimators, fmu_paths, selected, fault.needs)
-    spec = with_fault(flight.spec, name)
-    spec = at_step(replace(spec, name=f"evaluate_{name}", record=flight.spec.record), STEP,
-                   fmu_paths, {FAULT_COMPONENT})
+    spec = replace(with_fault(flight.spec, name), name=f"evaluate_{name}",
+                   record=flight.spec.record)
     stop = None
     if fault.start > 0.0 and fault.start + fault.transient + AFTER_TRANSIENT < spec.stop_time:
         stop = fault.start + fault.transient + AFTER_TRANSIENT
