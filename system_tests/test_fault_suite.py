@@ -77,6 +77,15 @@ KNOWN_FAILURES: dict[tuple[str, str, str], str] = {
         "(R_acc = 1e-4 m²/s⁴) makes height and speed overconfident (h_std 0.55 m) and a "
         "0.1-0.4 m/s² bias drifts the height by about 30 m while every height sample still "
         "passes its wide gate"),
+    ("recovery", "all_fail", "AltitudeEKF"): REFERENCE_GNSS,
+    ("recovery", "gnss_step", "AltitudeEKF"): (
+        "AltitudeEKF isolates the GNSS within 10 s, but after the transient its error is 2.3 m "
+        "RMS against 0.58 m nominal (4.0x): part of the GNSS jumps (6 m, then 100 m) stays in "
+        "the GNSS-referenced height; not yet analysed (issue 16)"),
+    ("coverage", "none", "AltitudeEKF"): (
+        "AltitudeEKF's h_std is too cautious in the nominal flight (coverage 100 %, the band "
+        "ends at 99.5 %): its default accelerometer-bias, baro-offset and terrain priors and "
+        "process noises are wider than this flight's sensors need (issue 16)"),
 }
 """(criterion, fault, estimator) -> why the cell fails today (docs/faults.md, "Results")."""
 
