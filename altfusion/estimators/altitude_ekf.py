@@ -62,7 +62,6 @@ from altfusion.estimators.base import (
     RADAR,
     Estimator,
     HealthParams,
-    Status,
 )
 from altfusion.estimators.kalman import update_scalar
 from altfusion.params import param
@@ -404,15 +403,9 @@ class AltitudeEKF(Estimator):
         return True
 
     def _reset_to_reference(self, y: float, S: float) -> None:
-        source = self._reference
         self._reference_rejected_since = None
-        self.reset_height(source, y, S)
-        self.n_height_resets += 1
-        self._step_flags |= Status.HEIGHT_RESET
-        self.note(f"{source}: the height reference rejected for "
-                  f"{self.params.reset_timeout:g} s; height reset by {y:.4g} m to it "
-                  f"(reset {self.n_height_resets})")
-        self.accept(source)
+        self.height_reset(self._reference, y, S, f"the height reference rejected for "
+                                                 f"{self.params.reset_timeout:g} s")
 
     def _adaptation(self, source: str) -> float:
         """The factor on R of seed 004's bounded innovation-based adaptation (1: off)."""

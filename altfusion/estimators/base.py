@@ -430,13 +430,8 @@ class Estimator(Component):
                 (source in HEIGHT_SOURCES and now - self._last_aiding >= p.reset_timeout
                  and not self.contradicted(source, innovation))
                 or (source == "gps_vz" and now - since >= p.reset_timeout)):
-            self.reset_height(source, innovation, variance)
-            self.n_height_resets += 1
-            self._step_flags |= Status.HEIGHT_RESET
-            self.note(f"{source}: no height source fused for {now - self._last_aiding:.3g} s; "
-                      f"height reset by {innovation:.4g} m to this source "
-                      f"(reset {self.n_height_resets})")
-            self.accept(source)
+            self.height_reset(source, innovation, variance,
+                              f"no height source fused for {now - self._last_aiding:.3g} s")
             return False
         setattr(self, f"{source}_rejected", getattr(self, f"{source}_rejected") + 1)
         self.n_rejected += 1
@@ -497,6 +492,18 @@ class Estimator(Component):
         other_mean, other_variance = window.mean(), window.mean_variance()
         return (abs(other_mean) <= sigmas * math.sqrt(other_variance)
                 and abs(mean - other_mean) > sigmas * math.sqrt(spread**2 + other_variance))
+
+    def height_reset(self, source: str, innovation: float, variance: float,
+                     reason: str) -> None:
+        """PX4's height reset onto a sample of ``source`` (:meth:`reset_height`), counted in
+        ``n_height_resets``, flagged in ``status`` for this step, noted with ``reason`` and
+        the sample accepted."""
+        self.reset_height(source, innovation, variance)
+        self.n_height_resets += 1
+        self._step_flags |= Status.HEIGHT_RESET
+        self.note(f"{source}: {reason}; height reset by {innovation:.4g} m to this source "
+                  f"(reset {self.n_height_resets})")
+        self.accept(source)
 
     def jump_variance(self, noise_variance: float, elapsed: float) -> float:
         """Variance of a height's jump from its last accepted sample, ``elapsed`` s after the
