@@ -138,7 +138,9 @@ def command_compare(args: argparse.Namespace) -> int:
     return status
 
 
-def _guarded(command):
+def guarded(command):
+    """``command`` with a user's campaign mistake (:class:`CampaignError`, which the
+    evaluation's errors extend, or :class:`SwapError`) as one ``error:`` line, status 2."""
     def run(args: argparse.Namespace) -> int:
         try:
             return command(args)
@@ -178,10 +180,10 @@ def add_commands(commands) -> None:
     mc.add_argument("--run", type=int, default=None, metavar="I",
                     help="re-run run I alone (settings from --out's campaign if there is one) "
                          "and check it against the stored run")
-    mc.set_defaults(handler=_guarded(command_mc))
+    mc.set_defaults(handler=guarded(command_mc))
     report = commands.add_parser("report", help="plots and an HTML report of a campaign")
     report.add_argument("results", type=Path, help="campaign folder (altfusion mc --out)")
-    report.set_defaults(handler=_guarded(command_report))
+    report.set_defaults(handler=guarded(command_report))
     compare = commands.add_parser(
         "compare", help="the same seeded runs through several estimators, side by side")
     _campaign_options(compare)
@@ -190,4 +192,4 @@ def add_commands(commands) -> None:
                               "named 'estimator'")
     compare.add_argument("--out", default=None,
                          help="comparison folder (default: results/compare/<system>)")
-    compare.set_defaults(handler=_guarded(command_compare))
+    compare.set_defaults(handler=guarded(command_compare))

@@ -2,10 +2,9 @@
 HTML page and markdown (``docs/evaluation.md`` with ``--docs``)."""
 
 import argparse
-import sys
 from pathlib import Path
 
-from altfusion.montecarlo.source import CampaignError
+from altfusion.montecarlo.commands import guarded
 
 DEFAULT_RUNS = 20
 
@@ -96,18 +95,6 @@ def command_evaluate(args: argparse.Namespace) -> int:
     return status
 
 
-def _guarded(command):
-    def run(args: argparse.Namespace) -> int:
-        from altfusion.montecarlo.evaluate_scenarios import EvaluationError
-
-        try:
-            return command(args)
-        except (CampaignError, EvaluationError) as error:
-            print(f"error: {error}", file=sys.stderr)
-            return 2
-    return run
-
-
 def add_command(commands) -> None:
     """Register ``evaluate`` on the CLI's subparsers."""
     parser = commands.add_parser(
@@ -138,4 +125,4 @@ def add_command(commands) -> None:
     parser.add_argument("--docs", default=None, metavar="DIR",
                         help="also write DIR/evaluation.md (the documentation's page)")
     parser.add_argument("--quiet", action="store_true", help="no progress lines")
-    parser.set_defaults(handler=_guarded(command_evaluate))
+    parser.set_defaults(handler=guarded(command_evaluate))

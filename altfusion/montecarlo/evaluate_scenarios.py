@@ -37,6 +37,7 @@ from altfusion.cosim.instances import fmu_info
 from altfusion.cosim.system import ComponentSpec, Metric, SystemSpec
 from altfusion.estimators.base import HEIGHT_SOURCES, Estimator
 from altfusion.montecarlo.evaluate_metrics import Fault
+from altfusion.montecarlo.source import CampaignError
 from altfusion.systems.catalog import build_system
 from altfusion.systems.sensors import SENSORS
 from altfusion.systems.wiring import EXTRA_SOURCES, SENSOR_OF_PREFIX, estimator_connections
@@ -73,7 +74,7 @@ NOISE_NAMES = ("baro_noise", "gps_noise", "gps_vz_noise", "acc_noise", "radar_no
 """The contract names of the sensor noises (1σ, SI units)."""
 
 
-class EvaluationError(ValueError):
+class EvaluationError(CampaignError):
     """A scenario or estimator that cannot be evaluated; the message says why."""
 
 
