@@ -68,10 +68,22 @@ ENGINE_SYSTEMS = sorted(SYSTEMS)
 ENGINE_RUN_SECONDS = 120.0
 """Simulated time per engine run (a system's full length when shorter), to bound CI time."""
 
-SHORT_ENGINE_RUNS = {name: 30.0 for name in ENGINE_SYSTEMS if name.startswith("xu2016_")}
-"""Shorter engine runs, s: the four seed 004 scenarios share their FMUs and wiring (the
-heaviest systems: ten FMUs at 0.01 s) and differ only in the profile and the wind; 30 s covers
-the take-off, the laser's range and the first switch of the height source."""
+SHORT_ENGINE_RUNS = {
+    **{name: 30.0 for name in ENGINE_SYSTEMS if name.startswith("xu2016_")},
+    **{name: 40.0 for name in ("fault_flight", "fault_flight_baro_step",
+                               "fault_demo_altitude_ekf", "yang2020_altitude_ekf",
+                               "yang2020_baseline", "sensors_yang2020",
+                               "replay_auterion", "replay_px4_sitl")},
+}
+"""Shorter engine runs, s, for systems whose FMUs, rates and wiring another system's full
+run already covers, to bound CI time. The four seed 004 scenarios share their FMUs and wiring
+(the heaviest systems: ten FMUs at 0.01 s) and differ only in the profile and the wind; 30 s
+covers the take-off, the laser's range and the first switch of the height source. The fault
+flight and its baro_step variant (the fault starts at 130 s, after any engine run's end), seed
+003's loop on AltitudeEKF or BaselineKF and the fault demonstration on AltitudeEKF (``yang2020``
+and ``fault_demo_yang`` run their 120 s: the same loop and fault component on YangFusionKF,
+through the GNSS outage from 100 s), seed 003's sensors alone, and the two log replays: 40 s
+covers every sensor rate, the take-off and each estimator's start."""
 
 
 def engine_run_seconds(system: str) -> float:
