@@ -72,11 +72,6 @@ KNOWN_FAILURES: dict[tuple[str, str, str], str] = {
     ("recovery", "all_fail", "XuSHAEKF"): REFERENCE_GNSS,
     ("recovery", "all_fail", "YangFusionKF"): YANG_WEIGHTS,
     ("recovery", "baro_drift", "YangFusionKF"): YANG_WEIGHTS,
-    ("recovery", "acc_bias", "YangFusionKF"): (
-        "YangFusionKF has no accelerometer-bias state: the acceleration measurement "
-        "(R_acc = 1e-4 m²/s⁴) makes height and speed overconfident (h_std 0.55 m) and a "
-        "0.1-0.4 m/s² bias drifts the height by about 30 m while every height sample still "
-        "passes its wide gate"),
     ("recovery", "all_fail", "AltitudeEKF"): REFERENCE_GNSS,
     ("recovery", "gnss_step", "AltitudeEKF"): (
         "AltitudeEKF isolates the GNSS within 10 s, but after the transient its error is 2.3 m "

@@ -90,11 +90,17 @@ HEIGHT_SOURCES = ("baro", "gps", "radar", "laser")
 SOURCES = (*HEIGHT_SOURCES, "gps_vz", "acc")
 """Every source with a test ratio and a rejection count, in the order of their status bits."""
 
-PLAUSIBLE_RANGE = {"acc_z": ("acc", 160.0), "gps_vz": ("gps_vz", 1000.0),
+ACC_CLIP = 0.95 * 16.0 * 9.80665
+"""A vertical acceleration beyond 95 % of ±16 g (the full scale of common MEMS
+accelerometers) is a clipped reading (PX4's PX4Accelerometer counts a raw sample beyond 95 %
+of the range as clipping): the true acceleration lies somewhere beyond it, so the reading is
+no measurement of it."""
+
+PLAUSIBLE_RANGE = {"acc_z": ("acc", ACC_CLIP), "gps_vz": ("gps_vz", 1000.0),
                    **{f"{source}_h": (source, 1e5) for source in HEIGHT_SOURCES}}
-"""Plausibility bounds of the sample values (source charged, largest magnitude): ±16 g, the
-full scale of common MEMS accelerometers; 1000 m/s, about Mach 3; ±100 km of height, the
-Kármán line. A value beyond its bound cannot be a measurement: the sample is rejected as
+"""Plausibility bounds of the sample values (source charged, largest magnitude): the
+accelerometer's clipping level :data:`ACC_CLIP`; 1000 m/s, about Mach 3; ±100 km of height,
+the Kármán line. A value beyond its bound cannot be a measurement: the sample is rejected as
 that source's (test ratio value²/bound²) and takes no part in the step."""
 
 
