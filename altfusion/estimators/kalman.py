@@ -76,9 +76,17 @@ def update(x: np.ndarray, P: np.ndarray, z: np.ndarray | float, H: np.ndarray,
     else:
         S = symmetrize(HP.dot(H.T) + R)
         K = gain_scale * np.linalg.solve(S, HP).T
-    I_KH = _identity(len(x)) - K.dot(H)
-    P_new = symmetrize(I_KH.dot(P).dot(I_KH.T) + K.dot(R).dot(K.T))
-    return Update(x + K.dot(y), P_new, y, S, K)
+    return Update(x + K.dot(y), joseph(P, K, H, R), y, S, K)
+
+
+def joseph(P: np.ndarray, K: np.ndarray, H: np.ndarray, R: np.ndarray | float) -> np.ndarray:
+    """P = (I - K H) P⁻ (I - K H)ᵀ + K R Kᵀ: the covariance after an update with the gain K,
+    whatever gain it is, for a measurement noise of covariance R. With the filter's own K
+    and R, :func:`update`'s P; with another R (the measurement's true noise where the
+    filter's R is not), the covariance of the filter's actual error."""
+    R = np.asarray(R, dtype=float).reshape(K.shape[1], K.shape[1])
+    I_KH = _identity(len(P)) - K.dot(H)
+    return symmetrize(I_KH.dot(P).dot(I_KH.T) + K.dot(R).dot(K.T))
 
 
 @cache
