@@ -52,9 +52,6 @@ HAJIYEV_GNSS = ("HajiyevAdaptiveEstimator gates the GNSS on the jump of its resi
 REFERENCE_GNSS = ("the estimator takes the GNSS as its height reference (a baro bias state "
                   "absorbs the rest): GNSS +10 m is a 10 m height error, beyond 3x the nominal "
                   "RMS (PX4 with GNSS as reference does the same)")
-YANG_WEIGHTS = ("YangFusionKF's optimal weighting (eqs. 7-8) has no baro-bias state: a baro "
-                "error of 5-10 m moves the fused height by the baro's weight 0.18, beyond 3x "
-                "the filter's 0.2 m nominal RMS")
 
 KNOWN_FAILURES: dict[tuple[str, str, str], str] = {
     ("isolation", "baro_step", "WhangGAEstimator"): WHANG_BARO,
@@ -70,8 +67,12 @@ KNOWN_FAILURES: dict[tuple[str, str, str], str] = {
         "the accelerometer only: 5.4 m RMS against 1.0 m nominal"),
     ("recovery", "all_fail", "BaselineKF"): REFERENCE_GNSS,
     ("recovery", "all_fail", "XuSHAEKF"): REFERENCE_GNSS,
-    ("recovery", "all_fail", "YangFusionKF"): YANG_WEIGHTS,
-    ("recovery", "baro_drift", "YangFusionKF"): YANG_WEIGHTS,
+    ("recovery", "all_fail", "YangFusionKF"): (
+        "YangFusionKF's baro-offset state takes up the baro's +5 m, but the GNSS's +10 m (a "
+        "third of one sample's 30 m noise; the bias test's mean over 2.5 s has a 6 m "
+        "standard deviation) is an error no sensor contradicts beyond its noise: it enters "
+        "the height with the GNSS's weight against the radio altimeter (0.1), 0.82 m RMS "
+        "against 3x nominal 0.76 m"),
     ("recovery", "all_fail", "AltitudeEKF"): REFERENCE_GNSS,
     ("recovery", "gnss_step", "AltitudeEKF"): (
         "AltitudeEKF isolates the GNSS within 10 s, but after the transient its error is 2.3 m "
