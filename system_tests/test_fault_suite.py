@@ -62,9 +62,6 @@ KNOWN_FAILURES: dict[tuple[str, str, str], str] = {
     ("recovery", "gnss_step", "WhangGAEstimator"): WHANG_GNSS,
     ("recovery", "gnss_outage_return_off", "WhangGAEstimator"): WHANG_GNSS,
     ("recovery", "gnss_step", "HajiyevAdaptiveEstimator"): HAJIYEV_GNSS,
-    ("recovery", "baro_step", "XuSHAEKF"): (
-        "with its barometer isolated above the laser's 25 m, XuSHAEKF has the 30 m GNSS and "
-        "the accelerometer only: 5.4 m RMS against 1.0 m nominal"),
     ("recovery", "all_fail", "BaselineKF"): REFERENCE_GNSS,
     ("recovery", "all_fail", "XuSHAEKF"): REFERENCE_GNSS,
     ("recovery", "all_fail", "YangFusionKF"): (

@@ -35,6 +35,10 @@ gate over the last ``reset_timeout`` (a step smaller than one sample's gate but 
 and as far from those of another fused source that passes the same test, is rejected, and
 isolated after ``reset_timeout`` of it (:meth:`Estimator._biased`).
 
+Re-referencing (with ``fault_detection``): an isolated height source with an offset state
+(:meth:`Estimator.reset_offset`) whose innovations stay on one side is re-admitted with
+that state reset onto it (:meth:`Estimator._rereference`).
+
 Inputs outside any stream (``extra_inputs``, e.g. ``wind_speed``) have no count: they are read
 with :meth:`Estimator.held_input`, which holds the last finite value over non-finite ones.
 """
@@ -439,6 +443,8 @@ class Estimator(Component):
             self.height_reset(source, innovation, variance,
                               f"no height source fused for {now - self._last_aiding:.3g} s")
             return False
+        if bound is None and self._rereference(source, innovation, variance, since):
+            return False
         setattr(self, f"{source}_rejected", getattr(self, f"{source}_rejected") + 1)
         self.n_rejected += 1
         self._mark(source, SourceBit.REJECTED)
@@ -450,6 +456,40 @@ class Estimator(Component):
                       f"fused: isolated until a sample passes the gate")
         self.note(f"{source}: sample rejected (innovation {innovation:.4g}, test ratio "
                   f"{ratio:.3g}{', persistently biased' if biased else ''})")
+        return False
+
+    def _rereference(self, source: str, innovation: float, variance: float,
+                     since: float) -> bool:
+        """Re-admit an isolated height source as a relative sensor (with ``fault_detection``):
+        True if ``source`` has been rejected for twice ``reset_timeout`` (isolated for at
+        least one), every innovation of its bias window has the same sign (a constant offset,
+        not noise) and the estimator has an offset state for it
+        (:meth:`reset_offset`), which then moves onto this sample; the sample is consumed
+        and the source's window restarts. PX4's baro bias estimator re-learns a baro offset
+        the same way while GNSS holds the height; a source without an offset state (the
+        height reference) stays isolated."""
+        p, now = self.params, self.time
+        window = self._innovations.get(source)
+        if not (p.fault_detection and source in HEIGHT_SOURCES
+                and self._source_status & source_bit(source, SourceBit.ISOLATED)
+                and now - since >= 2.0 * p.reset_timeout
+                and window is not None and window.n >= BIAS_MIN_SAMPLES
+                and (all(y > 0.0 for _, y, _ in window.samples)
+                     or all(y < 0.0 for _, y, _ in window.samples))
+                and self.reset_offset(source, innovation, variance)):
+            return False
+        del self._innovations[source]
+        self._disagrees.pop(source, None)
+        self.note(f"{source}: isolated for {now - since:.3g} s with a constant offset; its "
+                  f"offset state reset by {innovation:.4g} m and the source re-admitted")
+        self.accept(source)
+        return True
+
+    def reset_offset(self, source: str, innovation: float, variance: float) -> bool:
+        """Move the offset state of height source ``source`` by ``innovation`` onto a sample
+        whose innovation variance is ``variance`` (that state's variance becomes it, its
+        correlations zero) and return True; False (the default) if the estimator has no
+        offset state for ``source``."""
         return False
 
     def _biased(self, source: str, innovation: float, variance: float, sigmas: float) -> bool:

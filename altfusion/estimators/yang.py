@@ -63,8 +63,10 @@ Deviations from the paper:
   (7)-(8); d is learnt from the baro's disagreement with GPS and radar (``baro_drift``:
   0.28 m RMS). The baro gate is on z - h - d against P_hh + 2 P_hd + P_dd + σ_ba²;
 * health (estimators/base.py): a height source rejected for ``reset_timeout`` while another
-  agrees is isolated; with every height source rejected that long the height resets onto the
-  next sample (the overconfident prediction can no longer lock the measurements out).
+  agrees is isolated (an isolated barometer with a constant offset is re-admitted with d
+  reset onto it, :meth:`reset_offset`); with every height source rejected that long the
+  height resets onto the next sample (the overconfident prediction can no longer lock the
+  measurements out).
 
 Scenario of the paper (Section 4): profile ``yang2020`` (climb, cruise at 1440 m, descent over
 420 s, reference altitude sea level); GnssReceiver every 100 ms with σ_h = 30 m
@@ -278,6 +280,14 @@ class YangFusionKF(Estimator):
             return
         self.x = (self.x[0] + innovation, *self.x[1:])
         self.P = self._initial_covariance(variance)
+
+    def reset_offset(self, source: str, innovation: float, variance: float) -> bool:
+        """The baro offset d (an isolated baro re-admitted, estimators/base.py; the state
+        exists with ``fault_detection``, the only case the base calls this in)."""
+        if source != "baro":
+            return False
+        self.x, self.P = reset_state(self.x, self.P, 4, self.x[4] + innovation, variance)
+        return True
 
     def _initial_covariance(self, height_variance: float) -> tuple[tuple[float, ...], ...]:
         """Diagonal: ``height_variance``, then the initial variances of speed, acceleration
