@@ -47,7 +47,7 @@ Deviations from the paper:
   the height to a biased accelerometer: 0.1-0.4 m/s² drifted the height about 30 m with h_std
   0.55 m on the fault suite's flight (``acc_bias``), and every height sample then fell outside
   the gate. The GPS vertical speed makes b observable (v̇ = a = z_acc - b): the bias is learnt
-  and the height stays within its h_std (0.39 m RMS, coverage 97 %). With
+  and the height stays within its h_std (0.42 m RMS, coverage 96 %). With
   ``fault_detection`` false the state has zero variance and no process noise: the filter is
   the paper's, bit for bit;
 * baro offset (with ``fault_detection``; seed 003's barometer has none): a fifth state d,
