@@ -52,8 +52,13 @@ def measure(name: str, fmus: dict[str, Path]) -> list[tuple[str, str, float, flo
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("systems", nargs="*", default=PAPER_SYSTEMS, choices=list(SYSTEMS))
+    parser.add_argument("systems", nargs="*", metavar="SYSTEM",
+                        help="catalog systems (default: every paper system and fault_flight)")
     args = parser.parse_args()
+    unknown = [name for name in args.systems if name not in SYSTEMS]
+    if unknown:
+        parser.error(f"unknown system(s) {unknown}; known: {list(SYSTEMS)}")
+    args.systems = args.systems or PAPER_SYSTEMS
     fmus = {path.stem: path for path in MODELS.glob("*.fmu")}
     print(f"{'system':24}{'component':26}{'FMU':26}{'RMS m':>9}{'coverage':>10}{'valid':>7}")
     for name in args.systems:

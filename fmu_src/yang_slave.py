@@ -14,6 +14,9 @@ class YangFusionKF(fmi.CoreSlave):
         fmi.Output("h_fused", "m", "Weighted-fusion height y of the last fusion (eq. 7)"),
         fmi.Output("fused_std", "m", "Its standard deviation σ_Y = (Σ 1/σ_i²)^(-1/2)"),
         fmi.Output("az_est", "m/s2", "Vertical-acceleration estimate"),
+        fmi.Output("acc_bias", "m/s2", "Accelerometer-bias estimate (0 without "
+                                       "fault_detection: the paper's filter has none)"),
+        fmi.Output("baro_bias", "m", "Baro-offset estimate d (0 without fault_detection)"),
         fmi.Output("weight_gps", "1", "Weight ω of GPS in the last fusion (0: not live)"),
         fmi.Output("weight_baro", "1", "Weight ω of the baro in the last fusion"),
         fmi.Output("weight_radar", "1", "Weight ω of the radio altimeter in the last fusion"),

@@ -303,17 +303,20 @@ scene's tuning (Q_b = 0.04 m² per step) it follows a failed baro (docs/estimato
 @pytest.mark.parametrize("name", FAILED_BARO)
 def test_a_failed_baro_is_isolated_while_the_gps_agrees(fmus, name):
     """Issue 15's failed barometer: +200 m from t = 100 s, GPS (σ 10 m) healthy. The baro is
-    isolated within reset_timeout + one GPS period (2.5 + 1 s, asserted after 10 s, the fault
-    suite's isolation time) and the error stays within 3x the nominal error bound of this
-    scene, 3·(3 h_std) with the nominal h_std, for the last 60 s of 100 s after the fault
-    (before: Hajiyev, Bao and Xu followed the baro, 200 m off)."""
+    isolated within reset_timeout + one GPS period (2.5 + 1 s; asserted within 10 s, the fault
+    suite's isolation time: an estimator with a baro-offset state re-admits it later with
+    its new offset, estimators/base.py) and the error stays within 3x the nominal error
+    bound of this scene, 3·(3 h_std) with the nominal h_std, for the last 60 s of 100 s
+    after the fault (before: Hajiyev, Bao and Xu followed the baro, 200 m off)."""
     harness = Harness(fmus[name], TUNING[name], seed=3)
     try:
         nominal = [harness.step() for _ in range(500)][-1]
         step = {"override": {"baro_h": TRUTH + 220.0}}
+        isolated = False
         for _ in range(50):
             harness.step(**step)
-        assert harness.get("status") & source_bit("baro", SourceBit.ISOLATED)
+            isolated |= bool(harness.get("status") & source_bit("baro", SourceBit.ISOLATED))
+        assert isolated
         errors = []
         for _ in range(500):
             errors.append(abs(harness.step(**step)["h_est"] - TRUTH))

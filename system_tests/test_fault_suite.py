@@ -44,17 +44,24 @@ WHANG_BARO = ("WhangGAEstimator's barometer is ungated by design (its paper's we
               "follows): a failed barometer is followed as a bias, never isolated")
 WHANG_GNSS = ("WhangGAEstimator's GNSS calibrates the baro bias, whose random walk (its "
               "paper's Q_b = 400 m² per air-data step) absorbs a step within a few samples: "
-              "no persistent innovation to isolate; the height follows the GNSS")
+              "at 10 Hz its steady-state gain is about 0.32, a 100 m step's innovations decay "
+              "as 0.68^k and their mean over the bias test's 2.5 s is about 12.5 m against a "
+              "standard deviation of 8.8 m (1.4, the test needs 5); the height follows the "
+              "GNSS (106 m RMS after gnss_step, 50 m after gnss_outage_return_off)")
 HAJIYEV_GNSS = ("HajiyevAdaptiveEstimator gates the GNSS on the jump of its residual from the "
                 "last accepted one (its adaptation must follow the baro drift): the first "
-                "sample after a step inside the 4-sigma jump gate becomes the reference, so the "
-                "step leaves no persistent innovation; the height follows the GNSS")
+                "sample after a step inside the 4-sigma jump gate (204 m with this flight's "
+                "noises) becomes the reference, and the adaptive factor (eq. 30) takes the "
+                "residual for baro drift (gain about 0.9 at the first stepped sample): no "
+                "persistent innovation; the height follows the GNSS (102 m RMS after gnss_step)")
 REFERENCE_GNSS = ("the estimator takes the GNSS as its height reference (a baro bias state "
                   "absorbs the rest): GNSS +10 m is a 10 m height error, beyond 3x the nominal "
                   "RMS (PX4 with GNSS as reference does the same)")
-YANG_WEIGHTS = ("YangFusionKF's optimal weighting (eqs. 7-8) has no baro-bias state: a baro "
-                "error of 5-10 m moves the fused height by the baro's weight 0.18, beyond 3x "
-                "the filter's 0.2 m nominal RMS")
+NO_THIRD_SENSOR = (REFERENCE_GNSS + ". Both errors lie within one sample's noise (GNSS 30 m: "
+                   "the bias test's 5-sigma threshold over 2.5 s is 30 m) and no third sensor "
+                   "reads the height (no radar; a laser only below 25 m): nothing can tell "
+                   "which source is off, so none is isolated and h_valid stays true "
+                   "(BaselineKF 9.3 m, XuSHAEKF 6.1 m RMS)")
 
 KNOWN_FAILURES: dict[tuple[str, str, str], str] = {
     ("isolation", "baro_step", "WhangGAEstimator"): WHANG_BARO,
@@ -65,18 +72,14 @@ KNOWN_FAILURES: dict[tuple[str, str, str], str] = {
     ("recovery", "gnss_step", "WhangGAEstimator"): WHANG_GNSS,
     ("recovery", "gnss_outage_return_off", "WhangGAEstimator"): WHANG_GNSS,
     ("recovery", "gnss_step", "HajiyevAdaptiveEstimator"): HAJIYEV_GNSS,
-    ("recovery", "baro_step", "XuSHAEKF"): (
-        "with its barometer isolated above the laser's 25 m, XuSHAEKF has the 30 m GNSS and "
-        "the accelerometer only: 5.4 m RMS against 1.0 m nominal"),
-    ("recovery", "all_fail", "BaselineKF"): REFERENCE_GNSS,
-    ("recovery", "all_fail", "XuSHAEKF"): REFERENCE_GNSS,
-    ("recovery", "all_fail", "YangFusionKF"): YANG_WEIGHTS,
-    ("recovery", "baro_drift", "YangFusionKF"): YANG_WEIGHTS,
-    ("recovery", "acc_bias", "YangFusionKF"): (
-        "YangFusionKF has no accelerometer-bias state: the acceleration measurement "
-        "(R_acc = 1e-4 m²/s⁴) makes height and speed overconfident (h_std 0.55 m) and a "
-        "0.1-0.4 m/s² bias drifts the height by about 30 m while every height sample still "
-        "passes its wide gate"),
+    ("recovery", "all_fail", "BaselineKF"): NO_THIRD_SENSOR,
+    ("recovery", "all_fail", "XuSHAEKF"): NO_THIRD_SENSOR,
+    ("recovery", "all_fail", "YangFusionKF"): (
+        "YangFusionKF's baro-offset state takes up the baro's +5 m, but the GNSS's +10 m (a "
+        "third of one sample's 30 m noise; the bias test's mean over 2.5 s has a 6 m "
+        "standard deviation) is an error no sensor contradicts beyond its noise: it enters "
+        "the height with the GNSS's weight against the radio altimeter (0.1), 0.82 m RMS "
+        "against 3x nominal 0.76 m"),
     ("recovery", "all_fail", "AltitudeEKF"): REFERENCE_GNSS,
     ("recovery", "gnss_step", "AltitudeEKF"): (
         "AltitudeEKF isolates the GNSS within 10 s, but after the transient its error is 2.3 m "

@@ -182,12 +182,12 @@ def test_invalid_parameters_are_rejected_by_name(params, name):
         YangFusionKF(params)
 
 
-def _mems_flight(fault_detection: bool) -> tuple[float, YangFusionKF]:
+def _mems_flight(fault_detection: bool, **params) -> tuple[float, YangFusionKF]:
     """Issue 15's lock-out: a gentle 50-250 m climb over 150 s with a realistic MEMS
     accelerometer (bias 0.02 m/s², noise 0.05 m/s²) fused with the paper's σ_a = 0.01, a 1 m
     baro and a 2 m GPS (10 Hz, vertical speed 0.2 m/s); returns the final error."""
-    estimator = YangFusionKF(YangParams(R_gps=4.0, R_baro=1.0, fault_detection=fault_detection),
-                             step_size=0.01)
+    estimator = YangFusionKF(YangParams(R_gps=4.0, R_baro=1.0, fault_detection=fault_detection,
+                                        **params), step_size=0.01)
     feeder = StreamFeeder(estimator)
     rng = np.random.default_rng(1)
     for k in range(15000):
@@ -204,13 +204,68 @@ def _mems_flight(fault_detection: bool) -> tuple[float, YangFusionKF]:
     return estimator.h_est - h, estimator
 
 
-def test_an_overconfident_prediction_that_locks_the_heights_out_is_reset():
+def test_an_overconfident_prediction_that_locks_the_heights_out_is_recovered():
     """The paper's filter (fault_detection false) drifts out of its own 5σ gate and rejects
-    every height sample from then on (tens of metres off at the end); with fault_detection the
-    height resets once no height passed for reset_timeout, and the final error is at least 5x
-    smaller (measured: 50 m against 2.5 m)."""
+    every height sample from then on (tens of metres off at the end). With fault_detection
+    but neither bias state (an offset walk would take the drift up as a baro offset: 44 m)
+    the health machinery recovers it and the final error is at least 5x smaller: the GPS
+    still agrees with the drifting prediction at times, so the baro is isolated and
+    re-admitted with an offset (base's re-referencing) rather than the height reset
+    (measured: 38 m against 3.0 m)."""
     locked, paper = _mems_flight(False)
-    error, estimator = _mems_flight(True)
+    error, estimator = _mems_flight(True, P0_acc_bias=0.0, acc_bias_psd=0.0, baro_bias_psd=0.0)
     assert paper.n_height_resets == 0 and abs(locked) > 20.0
-    assert estimator.n_height_resets >= 1
+    assert paper.acc_bias == 0.0 == paper.baro_bias
+    assert estimator.baro_bias != 0.0       # no prior, no walk: only a re-reference moves d
     assert abs(error) < abs(locked) / 5.0
+
+
+def test_the_accelerometer_bias_state_learns_the_bias_and_keeps_the_heights_in():
+    """With fault_detection the accelerometer-bias state (PX4's, not in the paper) learns the
+    0.02 m/s² bias from the GPS vertical speed: within 3 of its own standard deviations
+    (measured: 0.0165 ± 0.0074), no height sample is ever rejected, no reset is needed and
+    the final error lies within 3 h_std (measured: 0.06 m, h_std 0.13 m)."""
+    error, estimator = _mems_flight(True)
+    assert abs(estimator.acc_bias - 0.02) <= 3.0 * math.sqrt(estimator.P[3][3])
+    assert estimator.n_rejected == 0 and estimator.n_height_resets == 0
+    assert abs(error) <= 3.0 * estimator.h_std
+
+
+def _drifting_baro_hover(fault_detection: bool) -> tuple[np.ndarray, YangFusionKF]:
+    """Section 4.2's sensors at 20 Hz (radar 5 Hz, GPS 10 Hz) over a 100 m hover of 400 s
+    whose barometer drifts by 10 m over 100 s from t = 100 s (the fault suite's baro_drift,
+    doubled) and stays off; returns the height errors of the last 100 s."""
+    estimator = YangFusionKF(YangParams(fault_detection=fault_detection), step_size=0.05)
+    feeder = StreamFeeder(estimator)
+    rng = np.random.default_rng(3)
+    errors = []
+    for k in range(8000):
+        t = 0.05 * (k + 1)
+        drift = 10.0 * min(max(t - 100.0, 0.0), 100.0) / 100.0
+        samples = {"baro": {"baro_h": 100.0 + drift + 20.0 * rng.standard_normal()},
+                   "acc": {"acc_z": 0.01 * rng.standard_normal()}}
+        if k % 2 == 1:
+            samples["gps"] = {"gps_h": 100.0 + 30.0 * rng.standard_normal(),
+                              "gps_vz": 0.2 * rng.standard_normal(), "gps_fix": True}
+        if k % 4 == 3:
+            samples["radar"] = {"radar_h": 100.0 + 10.0 * rng.standard_normal(),
+                                "radar_valid": True}
+        feeder.step(**samples)
+        if t > 300.0:
+            errors.append(estimator.h_est - 100.0)
+    return np.array(errors), estimator
+
+
+def test_the_baro_offset_state_takes_up_a_drifting_barometer():
+    """The paper's weighted fusion passes a 10 m baro drift into the height with the baro's
+    weight 9/49 (1.8 m, four times the filter's own h_std of 0.48 m); with fault_detection
+    the baro-offset state (PX4's baro bias, not in the paper) takes it up from the baro's
+    disagreement with GPS and radar: over the last 100 s the mean error is below half the
+    paper filter's (measured: 0.60 m against 2.24 m, the rest the offset's lag behind the
+    drift at PX4's slow random walk), and the offset estimate lies within 3 of its standard
+    deviations of the 10 m (measured: 10.7 ± 1.1 m)."""
+    paper_errors, paper = _drifting_baro_hover(False)
+    errors, estimator = _drifting_baro_hover(True)
+    assert paper.baro_bias == 0.0 and abs(paper_errors.mean()) > 1.0
+    assert abs(errors.mean()) < abs(paper_errors.mean()) / 2.0
+    assert abs(estimator.baro_bias - 10.0) <= 3.0 * math.sqrt(estimator.P[4][4])

@@ -6,8 +6,10 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from altfusion.estimators.kalman import (
+    constant_states_noise,
     predict,
     predict_constant_acceleration,
+    reset_state,
     scalar_gate,
     update,
     update_state_component,
@@ -73,6 +75,39 @@ def test_scalar_constant_acceleration_predict_is_the_matrix_one():
         np.testing.assert_allclose(x_s, x_m, rtol=1e-12, atol=1e-12 * np.abs(x).max())
         np.testing.assert_allclose(P_s, P_m, rtol=1e-12, atol=1e-12 * np.abs(P_m).max())
         assert np.array_equal(np.array(P_s), np.array(P_s).T)
+
+
+@pytest.mark.parametrize("constant", [1, 2])
+def test_scalar_predict_with_constant_states_is_the_matrix_one(constant):
+    """Bias states after (position, speed, acceleration): F = diag(F₃, I), Q block diagonal
+    (:func:`constant_states_noise`); the written-out form equals the matrix one to rounding
+    (1e-12, as above) and P⁻ is exactly symmetric."""
+    rng = np.random.default_rng(12)
+    n = 3 + constant
+    for _ in range(200):
+        dt = 10 ** rng.uniform(-3, 0)
+        F = np.eye(n)
+        F[:3, :3] = [[1.0, dt, dt * dt / 2], [0.0, 1.0, dt], [0.0, 0.0, 1.0]]
+        walks = tuple(10 ** rng.uniform(-6, 0, constant))
+        Q = np.array(constant_states_noise(white_jerk_noise(dt, 10 ** rng.uniform(-3, 1)),
+                                           walks))
+        assert np.array_equal(np.diag(Q)[3:], walks) and np.count_nonzero(Q[3:, :3]) == 0
+        P, x = _random_covariance(rng, n), 100 * rng.standard_normal(n)
+        x_s, P_s = predict_constant_acceleration(tuple(x), _as_tuples(P), dt, _as_tuples(Q))
+        x_m, P_m = predict(x, P, F, Q)
+        np.testing.assert_allclose(x_s, x_m, rtol=1e-12, atol=1e-12 * np.abs(x).max())
+        np.testing.assert_allclose(P_s, P_m, rtol=1e-12, atol=1e-12 * np.abs(P_m).max())
+        assert np.array_equal(np.array(P_s), np.array(P_s).T)
+
+
+def test_reset_state_sets_one_component_uncorrelated():
+    P = _random_covariance(np.random.default_rng(13), 4)
+    x, P_new = reset_state((1.0, 2.0, 3.0, 4.0), _as_tuples(P), 1, 7.0, 0.5)
+    P_new = np.array(P_new)
+    assert x == (1.0, 7.0, 3.0, 4.0)
+    assert P_new[1, 1] == 0.5 and np.count_nonzero(P_new[1]) == np.count_nonzero(P_new[:, 1]) == 1
+    others = [0, 2, 3]
+    assert np.array_equal(P_new[np.ix_(others, others)], P[np.ix_(others, others)])
 
 
 def test_scalar_component_updates_one_by_one_are_the_joint_matrix_update():

@@ -35,6 +35,10 @@ gate over the last ``reset_timeout`` (a step smaller than one sample's gate but 
 and as far from those of another fused source that passes the same test, is rejected, and
 isolated after ``reset_timeout`` of it (:meth:`Estimator._biased`).
 
+Re-referencing (with ``fault_detection``): an isolated height source with an offset state
+(:meth:`Estimator.reset_offset`) whose innovations stay on one side is re-admitted with
+that state reset onto it (:meth:`Estimator._rereference`).
+
 Inputs outside any stream (``extra_inputs``, e.g. ``wind_speed``) have no count: they are read
 with :meth:`Estimator.held_input`, which holds the last finite value over non-finite ones.
 """
@@ -90,11 +94,17 @@ HEIGHT_SOURCES = ("baro", "gps", "radar", "laser")
 SOURCES = (*HEIGHT_SOURCES, "gps_vz", "acc")
 """Every source with a test ratio and a rejection count, in the order of their status bits."""
 
-PLAUSIBLE_RANGE = {"acc_z": ("acc", 160.0), "gps_vz": ("gps_vz", 1000.0),
+ACC_CLIP = 0.95 * 16.0 * 9.80665
+"""A vertical acceleration beyond 95 % of ±16 g (the full scale of common MEMS
+accelerometers) is a clipped reading (PX4's PX4Accelerometer counts a raw sample beyond 95 %
+of the range as clipping): the true acceleration lies somewhere beyond it, so the reading is
+no measurement of it."""
+
+PLAUSIBLE_RANGE = {"acc_z": ("acc", ACC_CLIP), "gps_vz": ("gps_vz", 1000.0),
                    **{f"{source}_h": (source, 1e5) for source in HEIGHT_SOURCES}}
-"""Plausibility bounds of the sample values (source charged, largest magnitude): ±16 g, the
-full scale of common MEMS accelerometers; 1000 m/s, about Mach 3; ±100 km of height, the
-Kármán line. A value beyond its bound cannot be a measurement: the sample is rejected as
+"""Plausibility bounds of the sample values (source charged, largest magnitude): the
+accelerometer's clipping level :data:`ACC_CLIP`; 1000 m/s, about Mach 3; ±100 km of height,
+the Kármán line. A value beyond its bound cannot be a measurement: the sample is rejected as
 that source's (test ratio value²/bound²) and takes no part in the step."""
 
 
@@ -433,6 +443,8 @@ class Estimator(Component):
             self.height_reset(source, innovation, variance,
                               f"no height source fused for {now - self._last_aiding:.3g} s")
             return False
+        if bound is None and self._rereference(source, innovation, variance, since):
+            return False
         setattr(self, f"{source}_rejected", getattr(self, f"{source}_rejected") + 1)
         self.n_rejected += 1
         self._mark(source, SourceBit.REJECTED)
@@ -444,6 +456,40 @@ class Estimator(Component):
                       f"fused: isolated until a sample passes the gate")
         self.note(f"{source}: sample rejected (innovation {innovation:.4g}, test ratio "
                   f"{ratio:.3g}{', persistently biased' if biased else ''})")
+        return False
+
+    def _rereference(self, source: str, innovation: float, variance: float,
+                     since: float) -> bool:
+        """Re-admit an isolated height source as a relative sensor (with ``fault_detection``):
+        True if ``source`` has been rejected for twice ``reset_timeout`` (isolated for at
+        least one), every innovation of its bias window has the same sign (a constant offset,
+        not noise) and the estimator has an offset state for it
+        (:meth:`reset_offset`), which then moves onto this sample; the sample is consumed
+        and the source's window restarts. PX4's baro bias estimator re-learns a baro offset
+        the same way while GNSS holds the height; a source without an offset state (the
+        height reference) stays isolated."""
+        p, now = self.params, self.time
+        window = self._innovations.get(source)
+        if not (p.fault_detection and source in HEIGHT_SOURCES
+                and self._source_status & source_bit(source, SourceBit.ISOLATED)
+                and now - since >= 2.0 * p.reset_timeout
+                and window is not None and window.n >= BIAS_MIN_SAMPLES
+                and (all(y > 0.0 for _, y, _ in window.samples)
+                     or all(y < 0.0 for _, y, _ in window.samples))
+                and self.reset_offset(source, innovation, variance)):
+            return False
+        del self._innovations[source]
+        self._disagrees.pop(source, None)
+        self.note(f"{source}: isolated for {now - since:.3g} s with a constant offset; its "
+                  f"offset state reset by {innovation:.4g} m and the source re-admitted")
+        self.accept(source)
+        return True
+
+    def reset_offset(self, source: str, innovation: float, variance: float) -> bool:
+        """Move the offset state of height source ``source`` by ``innovation`` onto a sample
+        whose innovation variance is ``variance`` (that state's variance becomes it, its
+        correlations zero) and return True; False (the default) if the estimator has no
+        offset state for ``source``."""
         return False
 
     def _biased(self, source: str, innovation: float, variance: float, sigmas: float) -> bool:

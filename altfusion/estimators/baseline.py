@@ -15,7 +15,9 @@ Deviations from the papers' "normal Kalman filter" (which none of them specifies
 
 * an innovation gate of ``gate_sigma`` standard deviations rejects outliers of either source;
 * health (estimators/base.py): a source rejected for ``reset_timeout`` while the other agrees
-  is isolated; with no source fused for that long the height resets onto the next sample.
+  is isolated; with no source fused for that long the height resets onto the next sample; an
+  isolated barometer with a constant offset is re-admitted with b reset onto it
+  (:meth:`reset_offset`).
 """
 
 from dataclasses import dataclass
@@ -100,6 +102,15 @@ class BaselineKF(Estimator):
         self.x[0] += innovation
         self.P[0, :] = self.P[:, 0] = 0.0
         self.P[0, 0] = variance
+
+    def reset_offset(self, source: str, innovation: float, variance: float) -> bool:
+        """The baro bias b (an isolated baro re-admitted, estimators/base.py)."""
+        if source != "baro":
+            return False
+        self.x[2] += innovation
+        self.P[2, :] = self.P[:, 2] = 0.0
+        self.P[2, 2] = variance
+        return True
 
     def _publish(self) -> None:
         self.h_est, self.vz_est, self.bias = (float(v) for v in self.x)

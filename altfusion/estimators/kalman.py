@@ -76,9 +76,17 @@ def update(x: np.ndarray, P: np.ndarray, z: np.ndarray | float, H: np.ndarray,
     else:
         S = symmetrize(HP.dot(H.T) + R)
         K = gain_scale * np.linalg.solve(S, HP).T
-    I_KH = _identity(len(x)) - K.dot(H)
-    P_new = symmetrize(I_KH.dot(P).dot(I_KH.T) + K.dot(R).dot(K.T))
-    return Update(x + K.dot(y), P_new, y, S, K)
+    return Update(x + K.dot(y), joseph(P, K, H, R), y, S, K)
+
+
+def joseph(P: np.ndarray, K: np.ndarray, H: np.ndarray, R: np.ndarray | float) -> np.ndarray:
+    """P = (I - K H) P⁻ (I - K H)ᵀ + K R Kᵀ: the covariance after an update with the gain K,
+    whatever gain it is, for a measurement noise of covariance R. With the filter's own K
+    and R, :func:`update`'s P; with another R (the measurement's true noise where the
+    filter's R is not), the covariance of the filter's actual error."""
+    R = np.asarray(R, dtype=float).reshape(K.shape[1], K.shape[1])
+    I_KH = _identity(len(P)) - K.dot(H)
+    return symmetrize(I_KH.dot(P).dot(I_KH.T) + K.dot(R).dot(K.T))
 
 
 @cache
@@ -116,9 +124,13 @@ def predict_constant_acceleration(x: Vector, P: Matrix, dt: float, Q: Matrix,
     """:func:`predict` for the constant-acceleration model of (position, speed, acceleration),
     F = [[1, dt, dt²/2], [0, 1, dt], [0, 0, 1]], written out: x⁻ = F x, P⁻ = F P Fᵀ + Q.
 
+    States after the first three (biases) are constant: F = diag(F₃, I), so their own block
+    of P only gains their block of Q, and their covariances with the first three move by F₃.
+    With such states Q is given over all of them (n x n).
+
     P and Q must be symmetric; P⁻ is, exactly (its upper triangle is mirrored)."""
-    h, v, a = x
-    (p00, p01, p02), (_, p11, p12), (_, _, p22) = P
+    h, v, a = x[:3]
+    (p00, p01, p02), (_, p11, p12), (_, _, p22) = (row[:3] for row in P[:3])
     half = dt * dt / 2.0
     r00 = p00 + dt * p01 + half * p02                   # first row of F P
     r01 = p01 + dt * p11 + half * p12
@@ -131,8 +143,42 @@ def predict_constant_acceleration(x: Vector, P: Matrix, dt: float, Q: Matrix,
     m11 = r11 + dt * r12 + Q[1][1]
     m12 = r12 + Q[1][2]
     m22 = p22 + Q[2][2]
-    return ((h + dt * v + half * a, v + dt * a, a),
-            ((m00, m01, m02), (m01, m11, m12), (m02, m12, m22)))
+    x_new = (h + dt * v + half * a, v + dt * a, a)
+    if len(x) == 3:
+        return x_new, ((m00, m01, m02), (m01, m11, m12), (m02, m12, m22))
+    extra = range(3, len(x))
+    cross = [(P[0][k] + dt * P[1][k] + half * P[2][k] + Q[0][k],     # rows of F₃ times the
+              P[1][k] + dt * P[2][k] + Q[1][k],                      # constant states'
+              P[2][k] + Q[2][k]) for k in extra]                     # columns
+    rows = [[m00, m01, m02], [m01, m11, m12], [m02, m12, m22]]
+    for i in range(3):
+        rows[i].extend(column[i] for column in cross)
+    for k in extra:
+        rows.append([*cross[k - 3], *(P[k][j] + Q[k][j] for j in extra)])
+    for k in extra:                                     # mirror the constant states' block
+        for j in range(3, k):
+            rows[k][j] = rows[j][k]
+    return (*x_new, *x[3:]), rows
+
+
+def constant_states_noise(Q: Matrix, variances: Sequence[float]) -> tuple[tuple[float, ...], ...]:
+    """``Q`` (n x n) extended by states that are constant up to independent random walks
+    whose variances over the step are ``variances`` (a block diagonal Q)."""
+    n, m = len(Q), len(variances)
+    return (*(tuple(row) + (0.0,) * m for row in Q),
+            *(tuple(0.0 for _ in range(n + i)) + (variance,) + (0.0,) * (m - i - 1)
+              for i, variance in enumerate(variances)))
+
+
+def reset_state(x: Vector, P: Matrix, index: int, value: float, variance: float,
+                ) -> tuple[tuple[float, ...], tuple[tuple[float, ...], ...]]:
+    """x[index] set to ``value`` with variance ``variance``, uncorrelated with the other
+    states (a reset onto a measurement: its row and column of P zero but the diagonal)."""
+    x_new = tuple(value if i == index else xi for i, xi in enumerate(x))
+    P_new = tuple(tuple(variance if (i == index and j == index) else
+                        0.0 if (i == index or j == index) else p for j, p in enumerate(row))
+                  for i, row in enumerate(P))
+    return x_new, P_new
 
 
 def update_state_component(x: Vector, P: Matrix, index: int, z: float, variance: float,

@@ -33,6 +33,15 @@ Deviations from the paper:
 * GPS samples that arrive before the first air-data sample are not fused (z needs h^B; in a
   replayed log GPS may come first).
 * Health (estimators/base.py): the GPS calibrates the baro and does not aid the height.
+* h_std (with ``fault_detection``; the estimate is the paper's either way): eq. (34) fuses
+  R_h = R^B' + C as white noise, C = ((h^c - H0)² P^a + P^b)/(1 + â)² the variance of the
+  calibration â, b̂; but â and b̂ change at GPS samples only, so the N air-data samples
+  between two GPS samples (N = GPS interval / air-data interval, from the time stamps)
+  share one calibration error, which the filter averages down as if independent: h_std was
+  overconfident (coverage of |e| <= 2 h_std 0.80 in seed 000's scenario). ``h_std`` is the
+  error covariance of the filter's own gain K under the equivalent white noise of that
+  shared error, R^B' + N·C (``kalman.joseph``): coverage 0.99 in seed 000's scenario (N = 5),
+  0.96 on the fault suite's flight (N = 2).
 """
 
 from dataclasses import dataclass
@@ -41,7 +50,7 @@ import numpy as np
 
 from altfusion.constants import ISA_LAPSE_RATE, ISA_T0
 from altfusion.estimators.base import BARO_T, GPS, Estimator, HealthParams
-from altfusion.estimators.kalman import predict, update
+from altfusion.estimators.kalman import joseph, predict, update
 from altfusion.params import param
 
 ONE = np.array([[1.0]])
@@ -92,6 +101,9 @@ class WhangGAEstimator(Estimator):
         self.b, self.P_b = 0.0, p.P0_b
         self.x = np.array([p.H0, 0.0])
         self.P = np.diag([p.P0_h, p.P0_vz])
+        self.P_error = self.P
+        self._stamps: dict[str, float] = {}
+        self._intervals: dict[str, float] = {}
         self.h_prior = p.H0
         self.h_comp = p.H0
         self.lambda_meas = 0.0
@@ -108,12 +120,17 @@ class WhangGAEstimator(Estimator):
             F = np.array([[1.0, dt], [0.0, 1.0 - dt / p.tau]])                  # (33)
             Q = np.array([[0.0, 0.0], [0.0, p.Q_h * scale]])
             self.x, self.P = predict(self.x, self.P, F, Q)
+            if p.fault_detection:
+                self.P_error = predict(self.x, self.P_error, F, Q)[1]
         self.h_prior = float(self.x[0])
 
     # -------------------------------------------------------------- measurements
     def fuse_samples(self, samples) -> None:
         """Air data: λ-update; GPS: z-update; then compensation with the latest estimates."""
         air_data, gps = samples.get(BARO_T), samples.get(GPS)
+        for name, sample in (("baro", air_data), ("gps", gps)):
+            if sample is not None:
+                self._interval(name, sample[f"{name}_time"])
         if air_data is not None:
             self.accept("baro")
             self.baro = air_data["baro_h"]
@@ -177,6 +194,23 @@ class WhangGAEstimator(Estimator):
             return
         result = update(self.x, self.P, self.h_comp, H_ALPHA_BETA, R_h)
         self.x, self.P = result.x, result.P
+        if self.params.fault_detection:
+            white = self.params.R_baro / (1.0 + self.a) ** 2
+            shared = self._samples_per_calibration() * (R_h - white)
+            self.P_error = joseph(self.P_error, result.K, H_ALPHA_BETA, white + shared)
+
+    def _interval(self, name: str, stamp: float) -> None:
+        """Record the interval between the last two samples of ``name`` (positive only)."""
+        last = self._stamps.get(name)
+        if last is not None and stamp > last:
+            self._intervals[name] = stamp - last
+        self._stamps[name] = stamp
+
+    def _samples_per_calibration(self) -> float:
+        """N: the air-data samples between two GPS samples (at least 1), each compensated
+        with the same calibration â, b̂ (they change at GPS samples only)."""
+        baro, gps = self._intervals.get("baro"), self._intervals.get("gps")
+        return max(1.0, gps / baro) if baro and gps else 1.0
 
     def reset_height(self, source: str, innovation: float, variance: float) -> None:
         """Only the GPS is gated (the baro passes ungated, see the deviations): b̂ moves onto
@@ -186,6 +220,7 @@ class WhangGAEstimator(Estimator):
     def _publish(self) -> None:
         self.h_est = float(self.x[0])
         self.vz_est = float(self.x[1])
-        self.h_std = float(np.sqrt(self.P[0, 0]))
+        P = self.P_error if self.params.fault_detection else self.P
+        self.h_std = float(np.sqrt(P[0, 0]))
         self.scale_factor, self.bias = self.a, self.b
         self.scale_factor_var, self.bias_var = self.P_a, self.P_b
