@@ -267,22 +267,26 @@ class AltitudeEKF(Estimator):
 
     def _ground_constraint(self) -> None:
         """The vehicle cannot be below the ground its rangefinders see, nor sink into it:
-        once the terrain is known, an estimate with h < t is reset onto the ground, h = t and
-        v = max(v, 0), their correlations with the other states zeroed and their variances
-        kept (a height and velocity reset as PX4's; PX4 EKF2 keeps its terrain estimate
-        below the vehicle). It catches the speed an accelerometer integrates through a
-        touchdown whose impact it misses (the vehicle model stops without one) while a
-        rangefinder below its minimum range delivers nothing; a pseudo-measurement instead
-        would let the accelerometer-bias state explain the repeated corrections."""
+        once the terrain is known, an estimate with h < t is moved onto h = t, h and t each
+        by its share w = (P_hh - P_ht)/Var(h - t) of the violation (the estimate projection
+        of a Kalman filter with an equality constraint, on these two states), and its
+        downward speed cut by the height's share (v -= w·min(v, 0): a vehicle on a known
+        ground does not sink); the covariance is kept. PX4 EKF2 likewise keeps its terrain
+        estimate below the vehicle. It catches the speed an accelerometer integrates
+        through a touchdown whose impact it misses (the vehicle model stops without one)
+        while a rangefinder below its minimum range delivers nothing; a pseudo-measurement
+        instead lets the accelerometer-bias state explain the repeated corrections."""
         x, P = self.x, self.P
         if not (self.started and self._terrain_known) or x[H] >= x[T]:
             return
-        x[H] = x[T]
-        x[V] = max(x[V], 0.0)
-        for i in (H, V):
-            for j in range(6):
-                if j not in (H, V):
-                    P[i][j] = P[j][i] = 0.0
+        variance = P[H][H] - 2.0 * P[H][T] + P[T][T]
+        if variance <= 0.0:
+            return
+        share = min(max((P[H][H] - P[H][T]) / variance, 0.0), 1.0)
+        below = x[T] - x[H]
+        x[H] += share * below
+        x[T] -= (1.0 - share) * below
+        x[V] -= share * min(x[V], 0.0)
 
     def _gps_sigma(self, sample) -> float:
         """σ_G = gps_noise·(VDOP/gps_vdop_ref)·√max(1, N_ref/N) (seed 001's η; VDOP or N
