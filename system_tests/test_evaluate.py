@@ -71,6 +71,8 @@ def test_every_estimator_of_a_scenario_reads_the_same_sensor_outputs(evaluated):
     baseline = spec.component("BaselineKF").parameters
     assert baseline["R_baro"] == pytest.approx(0.5**2)          # the scenario's true noise
     assert baseline["R_gps"] == pytest.approx((2.0 * 1.5) ** 2)
+    stated = json.loads((out / "xu2016_hover15" / "scenario.json").read_text())["description"]
+    assert "stated sensor error models: " in stated and "terrain_h 0" in stated
     assert "XuSHAEKF" not in {c.name for c in read_ssp(out / "bao2017" / "system.ssp")
                               .spec.components}
     assert finished_runs(out / "xu2016_hover15") == [0, 1]

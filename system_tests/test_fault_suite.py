@@ -82,13 +82,17 @@ KNOWN_FAILURES: dict[tuple[str, str, str], str] = {
         "against 3x nominal 0.76 m"),
     ("recovery", "all_fail", "AltitudeEKF"): REFERENCE_GNSS,
     ("recovery", "gnss_step", "AltitudeEKF"): (
-        "AltitudeEKF isolates the GNSS within 10 s, but after the transient its error is 2.3 m "
-        "RMS against 0.58 m nominal (4.0x): part of the GNSS jumps (6 m, then 100 m) stays in "
-        "the GNSS-referenced height; not yet analysed (issue 16)"),
+        "AltitudeEKF isolates the GNSS 3.1 s after its 100 m step, but the 6 m step 60 s before "
+        "is 0.2 sigma of one 30 m GNSS sample and 1 sigma of the bias test's 2.5 s mean: "
+        "undetectable there (5 sigma needs about 60 s of samples), so the GNSS, its height "
+        "reference, drags the height up by 1.9 m and the baro offset and terrain learnt "
+        "against that datum keep it after the isolation: 2.3 m RMS against 0.58 m nominal"),
     ("coverage", "none", "AltitudeEKF"): (
-        "AltitudeEKF's h_std is too cautious in the nominal flight (coverage 100 %, the band "
-        "ends at 99.5 %): its default accelerometer-bias, baro-offset and terrain priors and "
-        "process noises are wider than this flight's sensors need (issue 16)"),
+        "AltitudeEKF's error in the fault flight is the GNSS datum's (30 m noise averaged over "
+        "the flight), correlated over about 100 s: one 300 s run holds a few independent "
+        "values, so a single run's coverage is 100 % whenever they fall within 2 h_std. Over "
+        "10 seeds of the nominal flight: 100 % in 7 runs (81-97.5 % in the others), 97.3 % "
+        "pooled, inside the 85-99.5 % band: the single-run criterion, not h_std, fails"),
 }
 """(criterion, fault, estimator) -> why the cell fails today (docs/faults.md, "Results")."""
 

@@ -6,6 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from altfusion.estimators.altitude_ekf import AltitudeEKF
 from altfusion.estimators.base import SourceBit, Status, source_bit
 from altfusion.estimators.baseline import BaselineKF
 from altfusion.estimators.xu import XuSHAEKF
@@ -25,10 +26,14 @@ from altfusion.montecarlo.evaluate_metrics import (
     valid_fraction,
 )
 from altfusion.montecarlo.evaluate_scenarios import (
+    NOISE_NAMES,
+    PAPER_SCENARIOS,
     EstimatorInfo,
+    error_parameters,
     noise_parameters,
     not_applicable,
 )
+from altfusion.systems.error_models import SENSOR_ERRORS
 
 DT = 0.1
 TIME = np.round(np.arange(0.0, 300.0 + DT / 2, DT), 10)
@@ -166,3 +171,23 @@ def test_true_noise_goes_to_the_parameters_each_estimator_has():
                   "R_laser": pytest.approx(1e-6)}
     yang = noise_parameters(estimator(YangFusionKF), noise)
     assert yang["R_gps_vz"] == pytest.approx(0.04) and yang["R_acc"] == pytest.approx(0.0025)
+
+
+def test_every_paper_scenario_states_error_models_an_estimator_can_take():
+    """The table of stated sensor error models covers every paper scenario, and each name is
+    a parameter of some estimator (a misspelt name would silently reach none)."""
+    parameters = set().union(*(estimator(core).parameters for core in (
+        AltitudeEKF, BaselineKF, XuSHAEKF, YangFusionKF)))
+    assert set(PAPER_SCENARIOS) <= set(SENSOR_ERRORS)
+    for errors in SENSOR_ERRORS.values():
+        assert set(errors) <= parameters
+
+
+def test_stated_error_models_go_to_every_estimator_with_that_parameter():
+    errors = {"baro_bias_psd": 0.0, "terrain_h": 0.0, "P0_offset": 0.01, "baro_noise": 0.7}
+    assert error_parameters(estimator(AltitudeEKF), errors) == {
+        "baro_bias_psd": 0.0, "terrain_h": 0.0, "P0_offset": 0.01}
+    assert error_parameters(estimator(XuSHAEKF), errors) == {"baro_bias_psd": 0.0,
+                                                             "terrain_h": 0.0}
+    assert error_parameters(estimator(BaselineKF), errors) == {}
+    assert "baro_noise" in NOISE_NAMES           # a restated noise goes as the noises go

@@ -13,9 +13,12 @@ latest one, held):
 
     h⁺ = h + Δ·v + Δ²/2·a,   v⁺ = v + Δ·a,   b_a, d, k, t: random walks
     Q: white acceleration of PSD acc_noise²·T_acc on (h, v), T_acc the accelerometer's
-       sample period, at least Δ (``accel_psd`` without an accelerometer, whose a is then
-       0); acc_bias_psd, baro_bias_psd, baro_scale_psd and terrain_psd on the others
-       (``height_ref`` "baro" freezes k; "range" freezes t)
+       sample period, at least Δ; acc_bias_psd, baro_bias_psd, baro_scale_psd and
+       terrain_psd on the others (``height_ref`` "baro" freezes k; "range" freezes t)
+
+Without an accelerometer acc_z is taken as 0, so that b_a carries minus the vehicle's
+acceleration: a constant-acceleration model (seed 003's eq. 11 with white jerk), b_a a random
+walk of ``jerk_psd``, plus white acceleration of ``accel_psd`` on (h, v).
 
 Measurements (one scalar update each, Joseph form, ``kalman.update_scalar``), each at its own
 time stamp s ≤ now: the state is taken back by δ = now - s along the model,
@@ -24,14 +27,15 @@ h(s) = h - δ·v + δ²/2·a and v(s) = v - δ·a, and the Jacobian row follows 
     baro (height_ref gps or range):  z = h(s) + d + k·(h(s) - h_c)    (h_c: height at start)
     baro (height_ref baro):          z = h(s)
     GNSS height:  z = h(s)  (z = h(s) - d with height_ref baro),
-                  σ = gps_noise·VDOP·√max(1, gps_nsat_ref/N)           (seed 001, eq. 14)
+                  σ = gps_noise·(VDOP/gps_vdop_ref)·√max(1, gps_nsat_ref/N)  (seed 001)
     GNSS vertical speed:  z = v(s);   radar, laser:  z = h(s) - t
 
 Each sample passes the shared innovation gate (``gate_sigma``, PX4's 5σ) and health logic of
 ``estimators/base.py`` (isolation, height reset when every source disagrees); on top, PX4's
 reset to the height reference (a reference that jumped takes the height; one returning
-inconsistent after an outage is not re-admitted) and a terrain reset when a rangefinder stays
-inconsistent while the height is pinned by the others.
+inconsistent after an outage is not re-admitted), a terrain reset when a rangefinder stays
+inconsistent while the height is pinned by the others, and the ground constraint: once the
+terrain is known an estimate below it is reset onto it, not sinking (h = t, v >= 0).
 
 Deviations from PX4 EKF2 (reasons in docs/altitude_ekf.md):
 
@@ -85,9 +89,12 @@ class AltitudeEKFParams(HealthParams):
     radar_noise: float = param(1.0, "m", "Radio-altimeter noise, 1σ", positive=True)
     laser_noise: float = param(0.1, "m", "Laser-rangefinder noise, 1σ (PX4 EKF2_RNG_NOISE)",
                                positive=True)
-    accel_psd: float = param(1.0, "m2/s3", "PSD of the white vertical acceleration of the "
-                                           "motion model while no accelerometer is fused",
-                             positive=True)
+    accel_psd: float = param(0.01, "m2/s3", "PSD of the white vertical acceleration added "
+                                            "to the motion model while no accelerometer is "
+                                            "fused", positive=True)
+    jerk_psd: float = param(0.01, "m2/s5", "PSD of the white jerk driving the motion model's "
+                                           "acceleration (state b_a) while no accelerometer is "
+                                           "fused (seed 003's jerk_psd)", min=0.0)
     acc_bias_psd: float = param(1e-5, "m2/s5", "PSD of the accelerometer-bias random walk "
                                                "(PX4 EKF2_ACC_B_NOISE 0.003 m/s³ squared)",
                                 min=0.0)
@@ -99,6 +106,8 @@ class AltitudeEKFParams(HealthParams):
                                min=0.0)
     gps_dop_scaling: bool = param(True, None, "Scale the GNSS height noise by VDOP and the "
                                               "satellite count (seed 001)")
+    gps_vdop_ref: float = param(1.0, "1", "VDOP at which gps_noise holds: the GNSS noise is "
+                                          "scaled by VDOP/gps_vdop_ref", positive=True)
     gps_nsat_ref: int = param(6, None, "Satellites below which the GNSS noise grows as "
                                        "√(gps_nsat_ref/N)", min=1)
     gate_sigma: float = param(5.0, "1", "Innovation gate of every source in standard "
@@ -161,7 +170,7 @@ class AltitudeEKF(Estimator):
                        (K, 0.0 if p.height_ref == "baro" else p.P0_scale),
                        (T, p.P0_terrain)):
             self.P[i][i] = var
-        self._q_rw = [0.0, 0.0, p.acc_bias_psd, p.baro_bias_psd,
+        self._q_rw = [0.0, 0.0, 0.0, p.baro_bias_psd,
                       0.0 if p.height_ref == "baro" else p.baro_scale_psd,
                       0.0 if p.height_ref == "range" else p.terrain_psd]
         self.h_c = 0.0
@@ -200,13 +209,15 @@ class AltitudeEKF(Estimator):
             a_in = 0.5 * (previous[1] + self._acc[1])    # two samples bound the step
         else:
             a_in = self._acc[1] if acc_on else 0.0
+        if self.started and acc_on != self._acc_used:
+            self._switch_acceleration(acc_on)
         self._acc_used = acc_on
         if not self.started:
             return
         x, P = self.x, [row[:] for row in self.P]
-        c = 0.5 * dt * dt if acc_on else 0.0              # ∂h⁺/∂(-b_a)
-        e = dt if acc_on else 0.0                         # ∂v⁺/∂(-b_a)
-        a = a_in - x[BA] if acc_on else 0.0
+        c = 0.5 * dt * dt                                 # ∂h⁺/∂(-b_a)
+        e = dt                                            # ∂v⁺/∂(-b_a)
+        a = a_in - x[BA]
         x = [x[H] + dt * x[V] + 0.5 * dt * dt * a, x[V] + dt * a, *x[2:]]
         P[H] = [p0 + dt * p1 - c * p2 for p0, p1, p2 in zip(P[H], P[V], P[BA], strict=True)]
         P[V] = [p1 - e * p2 for p1, p2 in zip(P[V], P[BA], strict=True)]
@@ -218,9 +229,20 @@ class AltitudeEKF(Estimator):
         P[V][V] += q * dt
         for i, psd in enumerate(self._q_rw):
             P[i][i] += psd * dt
+        P[BA][BA] += (p.acc_bias_psd if acc_on else p.jerk_psd) * dt
         for j in range(6):                                # exact symmetry
             P[j][H], P[j][V] = P[H][j], P[V][j]
         self.x, self.P = x, P
+
+    def _switch_acceleration(self, acc_on: bool) -> None:
+        """The accelerometer came or went: b_a changes meaning (its bias, or minus the
+        motion model's acceleration) and restarts from its prior, uncorrelated."""
+        self.x[BA] = 0.0
+        for j in range(6):
+            self.P[BA][j] = self.P[j][BA] = 0.0
+        self.P[BA][BA] = self.params.P0_acc_bias
+        self.note(f"accelerometer {'back' if acc_on else 'lost'}: "
+                  f"{'its bias' if acc_on else 'the motion model'} takes state b_a")
 
     # ------------------------------------------------------------------ measurements
     def fuse_samples(self, samples) -> None:
@@ -240,14 +262,39 @@ class AltitudeEKF(Estimator):
             sample = samples.get(stream)
             if sample is not None and self._range_in_use(name, sample[f"{name}_h"]):
                 self._fuse_height(name, sample[f"{name}_h"], sample[f"{name}_time"], sigma)
+        self._ground_constraint()
         self._publish()
 
+    def _ground_constraint(self) -> None:
+        """The vehicle cannot be below the ground its rangefinders see, nor sink into it:
+        once the terrain is known, an estimate with h < t is moved onto h = t, h and t each
+        by its share w = (P_hh - P_ht)/Var(h - t) of the violation (the estimate projection
+        of a Kalman filter with an equality constraint, on these two states), and its
+        downward speed cut by the height's share (v -= w·min(v, 0): a vehicle on a known
+        ground does not sink); the covariance is kept. PX4 EKF2 likewise keeps its terrain
+        estimate below the vehicle. It catches the speed an accelerometer integrates
+        through a touchdown whose impact it misses (the vehicle model stops without one)
+        while a rangefinder below its minimum range delivers nothing; a pseudo-measurement
+        instead lets the accelerometer-bias state explain the repeated corrections."""
+        x, P = self.x, self.P
+        if not (self.started and self._terrain_known) or x[H] >= x[T]:
+            return
+        variance = P[H][H] - 2.0 * P[H][T] + P[T][T]
+        if variance <= 0.0:
+            return
+        share = min(max((P[H][H] - P[H][T]) / variance, 0.0), 1.0)
+        below = x[T] - x[H]
+        x[H] += share * below
+        x[T] -= (1.0 - share) * below
+        x[V] -= share * min(x[V], 0.0)
+
     def _gps_sigma(self, sample) -> float:
-        """σ_G = gps_noise·VDOP·√max(1, N_ref/N) (seed 001's η; VDOP or N not given: 1)."""
+        """σ_G = gps_noise·(VDOP/gps_vdop_ref)·√max(1, N_ref/N) (seed 001's η; VDOP or N
+        not given: factor 1)."""
         p = self.params
         if not p.gps_dop_scaling:
             return p.gps_noise
-        vdop = sample["gps_vdop"] if sample["gps_vdop"] > 0.0 else 1.0
+        vdop = sample["gps_vdop"] / p.gps_vdop_ref if sample["gps_vdop"] > 0.0 else 1.0
         nsat = sample["gps_nsat"]
         return p.gps_noise * vdop * math.sqrt(max(1.0, p.gps_nsat_ref / nsat)
                                               if nsat > 0 else 1.0)
@@ -270,10 +317,8 @@ class AltitudeEKF(Estimator):
         x = self.x
         if delta == 0.0:
             return x[H], x[V], [(H, 1.0)], 0.0
-        a = (self._acc[1] - x[BA]) if self._acc_used else 0.0
-        row = [(H, 1.0), (V, -delta)]
-        if self._acc_used:
-            row.append((BA, -0.5 * delta * delta))
+        a = (self._acc[1] if self._acc_used else 0.0) - x[BA]
+        row = [(H, 1.0), (V, -delta), (BA, -0.5 * delta * delta)]
         return x[H] - delta * x[V] + 0.5 * delta * delta * a, x[V] - delta * a, row, delta
 
     def _model(self, source: str, h_s: float, row_h) -> tuple[float, list[tuple[int, float]]]:
@@ -322,7 +367,7 @@ class AltitudeEKF(Estimator):
     def _fuse_speed(self, vz: float, stamp: float) -> None:
         _, v_s, _, delta = self._back(stamp)
         row = [(V, 1.0)]
-        if delta > 0.0 and self._acc_used:
+        if delta > 0.0:
             row.append((BA, delta))
         R = self.params.gps_vz_noise ** 2
         y = vz - v_s
@@ -522,7 +567,7 @@ class AltitudeEKF(Estimator):
         self.h_est, self.vz_est = x[H], x[V]
         self.h_std = math.sqrt(max(P[H][H], 0.0))
         self.vz_std = math.sqrt(max(P[V][V], 0.0))
-        self.acc_bias = x[BA]
+        self.acc_bias = x[BA] if self._acc_used else 0.0
         self.baro_bias = x[D] if ref != "baro" else 0.0
         self.gps_bias = x[D] if ref == "baro" else 0.0
         self.baro_scale = x[K]

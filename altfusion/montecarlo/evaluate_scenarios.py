@@ -24,7 +24,12 @@ on what it reads: a stream that never delivers a sample is never fused.
 
 Each estimator gets the scenario's true sensor noise (:func:`sensor_noise`, the contract
 names ``baro_noise``... of ``docs/signals.md``) through the parameters it has: the contract
-name itself, else the variance ``R_<source>`` (σ²) or ``<source>_noise_std`` (σ).
+name itself, else the variance ``R_<source>`` (σ²) or ``<source>_noise_std`` (σ). In a paper
+scenario it also gets the sensors' error models beyond white noise that the paper system
+states (:data:`altfusion.systems.error_models.SENSOR_ERRORS`: a calibrated barometer, its
+drift, flat terrain, an accelerometer's turn-on bias...) through every parameter of the
+stated name it has (:func:`error_parameters`). The paper's own estimator keeps its paper's
+parameters.
 """
 
 import importlib
@@ -39,6 +44,7 @@ from altfusion.estimators.base import HEIGHT_SOURCES, Estimator
 from altfusion.montecarlo.evaluate_metrics import Fault
 from altfusion.montecarlo.source import CampaignError
 from altfusion.systems.catalog import build_system
+from altfusion.systems.error_models import SENSOR_ERRORS
 from altfusion.systems.sensors import SENSORS
 from altfusion.systems.wiring import EXTRA_SOURCES, SENSOR_OF_PREFIX, estimator_connections
 
@@ -197,6 +203,17 @@ def noise_parameters(estimator: EstimatorInfo, noise: dict[str, float]) -> dict[
     return values
 
 
+def error_parameters(estimator: EstimatorInfo, errors: dict[str, float]) -> dict[str, float]:
+    """The stated sensor error models ``errors`` (parameter name -> value) that the estimator
+    has parameters for; the noises among them are left to :func:`noise_parameters`."""
+    return {name: value for name, value in errors.items()
+            if name in estimator.parameters and name not in NOISE_NAMES}
+
+
+def describe_errors(errors: dict[str, float]) -> str:
+    return ", ".join(f"{name} {value:.3g}" for name, value in errors.items())
+
+
 @dataclass(frozen=True)
 class Scenario:
     """One column of the evaluation: the system to run and how to read its results."""
@@ -251,7 +268,9 @@ def paper_scenario(name: str, estimators: dict[str, EstimatorInfo],
     dropped = {c.name for c in spec.components
                if c.fmu in estimators and c.name != PAPER_ESTIMATOR}
     sources = sensor_sources(spec)
-    noise = sensor_noise(spec, fmu_paths)
+    errors = SENSOR_ERRORS.get(name, {})
+    noise = {**sensor_noise(spec, fmu_paths),
+             **{k: v for k, v in errors.items() if k in NOISE_NAMES}}
     chosen = list(estimators) if selected is None else selected
     components, missing, added, connections = {}, {}, [], []
     for estimator in (estimators[e] for e in chosen):
@@ -264,7 +283,8 @@ def paper_scenario(name: str, estimators: dict[str, EstimatorInfo],
             continue
         components[estimator.name] = estimator.name
         added.append(ComponentSpec(estimator.name, estimator.name, own.step_size,
-                                   noise_parameters(estimator, noise)))
+                                   {**noise_parameters(estimator, noise),
+                                    **error_parameters(estimator, errors)}))
         connections.extend(sensor_inputs(estimator, estimator.name, sources))
     if own.fmu not in chosen:
         components.pop(own.fmu, None)
@@ -278,7 +298,9 @@ def paper_scenario(name: str, estimators: dict[str, EstimatorInfo],
                           and c.end.partition(".")[0] not in dropped) + tuple(connections),
         record=record, metrics=metrics)
     stop, note = SHORTENED.get(name, (None, ""))
-    return Scenario(name, spec.description, spec, truth, components, missing, stop_time=stop,
+    description = spec.description + (f" (stated sensor error models: "
+                                      f"{describe_errors(errors)})" if errors else "")
+    return Scenario(name, description, spec, truth, components, missing, stop_time=stop,
                     note=note)
 
 

@@ -22,6 +22,7 @@ from altfusion.cosim.system import ComponentSpec, Metric, SystemSpec
 from altfusion.estimators.altitude_ekf import AltitudeEKF
 from altfusion.estimators.baseline import BaselineKF
 from altfusion.estimators.yang import YangFusionKF
+from altfusion.systems.error_models import SENSOR_ERRORS
 from altfusion.systems.plant import plant_components, plant_connections
 from altfusion.systems.sensors import SEED_003_SENSORS, sensor_components, sensor_connections
 from altfusion.systems.wiring import estimator_connections
@@ -42,14 +43,11 @@ ALTITUDE_EKF_NOISES = {"baro_noise": 20.0, "gps_noise": 30.0, "gps_vz_noise": 0.
                        "acc_noise": 0.01, "radar_noise": 10.0}
 """Seed 003's sensor noises (Section 4.2) by their contract names."""
 
-ALTITUDE_EKF = {**ALTITUDE_EKF_NOISES, "P0_offset": 1.0, "baro_bias_psd": 0.0, "P0_scale": 0.0,
-                "baro_scale_psd": 0.0, "P0_terrain": 1e-8, "terrain_psd": 0.0,
-                "P0_acc_bias": 1e-6, "acc_bias_psd": 0.0}
-"""AltitudeEKF given seed 003's sensor error models (Section 4.2): the noises; a barometer
-calibrated at launch without drift or scale error (offset prior 1 m, no random walk); the
-terrain known flat at 0 m (eq. 6's Q_sealevel); an accelerometer without bias (b_a's prior 1
-mm/s²). Priors wider than the truth's spread make h_std conservative (the coverage |e| <= 2
-h_std reaches 100 %)."""
+ALTITUDE_EKF = {**ALTITUDE_EKF_NOISES, **SENSOR_ERRORS["yang2020"]}
+"""AltitudeEKF given seed 003's sensors (Section 4.2): the noises and the error models of
+:data:`~altfusion.systems.error_models.SENSOR_ERRORS` (a barometer calibrated at launch
+without drift or scale error, the terrain known flat at 0 m, eq. 6's Q_sealevel; an
+accelerometer without bias)."""
 
 RECORD = ("plant.h", "plant.vz", "plant.az", "controller.h_ref", "controller.thrust",
           "air_data.baro_h", "gnss.gps_h", "gnss.gps_vz", "radar.radar_h",
