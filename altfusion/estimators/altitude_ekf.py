@@ -67,7 +67,7 @@ from altfusion.estimators.base import (
     Estimator,
     HealthParams,
 )
-from altfusion.estimators.kalman import update_scalar
+from altfusion.estimators.kalman import shift_state, update_scalar
 from altfusion.params import param
 
 H, V, BA, D, K, T = range(6)
@@ -552,10 +552,7 @@ class AltitudeEKF(Estimator):
         height reset the offset d and the terrain are set anew by their sources' next
         samples, unless the reset was onto that source."""
         i = V if source == "gps_vz" else H
-        self.x[i] += innovation
-        for j in range(6):
-            self.P[i][j] = self.P[j][i] = 0.0
-        self.P[i][i] = variance
+        shift_state(self.x, self.P, i, innovation, variance)
         if i == H:                        # the other sources' offsets: learnt anew
             owner = "gps" if self.params.height_ref == "baro" else "baro"
             self._offset_known = self._offset_known and source == owner

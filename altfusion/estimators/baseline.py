@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from altfusion.estimators.base import BARO, GPS, Estimator, HealthParams, Stream
-from altfusion.estimators.kalman import predict, update
+from altfusion.estimators.kalman import predict, shift_state, update
 from altfusion.params import param
 
 H_BARO = np.array([[1.0, 0.0, 1.0]])
@@ -99,17 +99,13 @@ class BaselineKF(Estimator):
         self._publish()
 
     def reset_height(self, source: str, innovation: float, variance: float) -> None:
-        self.x[0] += innovation
-        self.P[0, :] = self.P[:, 0] = 0.0
-        self.P[0, 0] = variance
+        shift_state(self.x, self.P, 0, innovation, variance)
 
     def reset_offset(self, source: str, innovation: float, variance: float) -> bool:
         """The baro bias b (an isolated baro re-admitted, estimators/base.py)."""
         if source != "baro":
             return False
-        self.x[2] += innovation
-        self.P[2, :] = self.P[:, 2] = 0.0
-        self.P[2, 2] = variance
+        shift_state(self.x, self.P, 2, innovation, variance)
         return True
 
     def _publish(self) -> None:

@@ -181,6 +181,16 @@ def reset_state(x: Vector, P: Matrix, index: int, value: float, variance: float,
     return x_new, P_new
 
 
+def shift_state(x, P, index: int, innovation: float, variance: float) -> None:
+    """In place, for a mutable state (numpy arrays or lists): x[index] moved by
+    ``innovation``, its variance ``variance``, uncorrelated with the other states (a reset
+    onto a measurement, :func:`reset_state` for the immutable tuples)."""
+    x[index] += innovation
+    for j in range(len(x)):
+        P[index][j] = P[j][index] = 0.0
+    P[index][index] = variance
+
+
 def update_state_component(x: Vector, P: Matrix, index: int, z: float, variance: float,
                            ) -> tuple[Vector, Matrix, float, float]:
     """:func:`update` for one direct measurement z of x[index] with variance R (H = a row of

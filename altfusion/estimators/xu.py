@@ -65,7 +65,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from altfusion.estimators.base import ACC, BARO, GPS, LASER, Estimator, HealthParams, Stream
-from altfusion.estimators.kalman import predict, update
+from altfusion.estimators.kalman import predict, shift_state, update
 from altfusion.params import param
 
 BARO_SOURCE, LASER_SOURCE = 0, 1
@@ -295,17 +295,13 @@ class XuSHAEKF(Estimator):
         self.started = True
 
     def reset_height(self, source: str, innovation: float, variance: float) -> None:
-        self.x[0] += innovation
-        self.P[0, :] = self.P[:, 0] = 0.0
-        self.P[0, 0] = variance
+        shift_state(self.x, self.P, 0, innovation, variance)
 
     def reset_offset(self, source: str, innovation: float, variance: float) -> bool:
         """The barometer's offset ε_b (an isolated baro re-admitted, estimators/base.py)."""
         if source != "baro":
             return False
-        self.x[3] += innovation
-        self.P[3, :] = self.P[:, 3] = 0.0
-        self.P[3, 3] = variance
+        shift_state(self.x, self.P, 3, innovation, variance)
         return True
 
     def _publish(self) -> None:
