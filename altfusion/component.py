@@ -51,7 +51,7 @@ class Component(ABC):
     @property
     def time(self) -> float:
         """Current time of this component, s (exact: from the tick count)."""
-        return self.clock.time()
+        return self.clock.now
 
     @property
     def dt(self) -> float:

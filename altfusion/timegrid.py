@@ -35,11 +35,14 @@ class TickClock:
         self._step_tolerance = 1e-9 * self.step_size
         self._time_tolerance = 1e-3 * self.step_size
         self.ticks = 0
+        self.now = self.time(0)
+        """The current time, s (:meth:`time` of the current tick, kept at each advance)."""
 
     def time(self, ticks: int | None = None) -> float:
         """Time at ``ticks`` steps after the start (default: the current tick), in s."""
-        n = self.ticks if ticks is None else ticks
-        return (self._start_num + n * self._step_num) / self._den
+        if ticks is None:
+            return self.now
+        return (self._start_num + ticks * self._step_num) / self._den
 
     def ticks_in(self, duration: float, name: str, allow_zero: bool = True) -> int:
         """``duration`` as a whole number of steps, or a ParameterError naming ``name``."""
@@ -63,11 +66,12 @@ class TickClock:
                 f"communication step {step_size!r} s differs from parameter "
                 f"step_size = {self.step_size!r} s"
             )
-        expected = (self._start_num + self.ticks * self._step_num) / self._den
+        expected = self.now
         if abs(current_time - expected) > self._time_tolerance:
             raise StepError(
                 f"doStep at t = {current_time!r} s, but this component is at t = {expected!r} s"
             )
         self.ticks += 1
+        self.now = (self._start_num + self.ticks * self._step_num) / self._den
         return self.ticks
 

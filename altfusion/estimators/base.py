@@ -49,6 +49,7 @@ from collections import deque
 from dataclasses import dataclass
 from enum import IntEnum, IntFlag
 from functools import cached_property
+from types import SimpleNamespace
 from typing import ClassVar
 
 from altfusion.component import Component
@@ -74,6 +75,17 @@ class Stream:
     @cached_property
     def time(self) -> str:
         return f"{self.prefix}_time"
+
+    @cached_property
+    def fields(self) -> tuple[str, ...]:
+        """The inputs a sample carries: the values, then the time stamp."""
+        return (*self.values, self.time)
+
+    @cached_property
+    def bounds(self) -> tuple[tuple[str, str, float], ...]:
+        """(input, source charged, bound) of each value with a :data:`PLAUSIBLE_RANGE`."""
+        return tuple((name, *PLAUSIBLE_RANGE[name]) for name in self.fields
+                     if name in PLAUSIBLE_RANGE)
 
 
 BARO = Stream("baro", ("baro_h",))
@@ -167,6 +179,10 @@ class Status(IntFlag):
     """A sample stamped ahead of the estimator's clock waits until due."""
 
 
+STEP_BITS = SimpleNamespace(**{flag.name: int(flag) for flag in Status})
+"""The :class:`Status` masks as plain ints (set at every step: IntFlag arithmetic is slow)."""
+
+
 class SourceBit(IntEnum):
     """Per-source bits of ``status``: bit 8 + 4·i + this, i the source's index in
     :data:`SOURCES`."""
@@ -182,7 +198,12 @@ class SourceBit(IntEnum):
 
 def source_bit(source: str, bit: SourceBit) -> int:
     """The ``status`` mask of ``bit`` of ``source``."""
-    return 1 << (8 + 4 * SOURCES.index(source) + bit)
+    return _SOURCE_BITS[source, bit]
+
+
+_SOURCE_BITS = {(source, bit): 1 << (8 + 4 * index + bit)
+                for index, source in enumerate(SOURCES) for bit in SourceBit}
+"""Every source's ``status`` masks, computed once (:func:`source_bit` runs at every sample)."""
 
 
 def status_bits() -> dict[str, int]:
@@ -288,7 +309,7 @@ class Estimator(Component):
         self._gate_width: dict[str, float] = {}
         self._innovations: dict[str, InnovationWindow] = {}
         self._disagrees: dict[str, bool] = {}
-        self._step_flags = Status(0)
+        self._step_flags = 0
         self._held_inputs: dict[str, float] = {}
         self._bad_inputs: set[str] = set()
         for name in self.extra_inputs:
@@ -321,7 +342,7 @@ class Estimator(Component):
             self.fuse(stream, sample)
 
     def update(self) -> None:
-        self._step_flags = Status(0)
+        self._step_flags = 0
         self.propagate(self.dt)
         samples = {}
         last_count = self._last_count
@@ -353,7 +374,7 @@ class Estimator(Component):
                       f"estimator steps; only the latest is fused")
         if stream.valid and not getattr(self, stream.valid):
             return None
-        sample = {name: float(getattr(self, name)) for name in (*stream.values, stream.time)}
+        sample = {name: float(getattr(self, name)) for name in stream.fields}
         if not all(map(math.isfinite, sample.values())):
             bad = {name: value for name, value in sample.items() if not math.isfinite(value)}
             self._ignore(stream, f"non-finite sample ignored {bad}")
@@ -363,15 +384,15 @@ class Estimator(Component):
             self._ignore(stream, f"sample stamped {lead:.4g} s ahead of the clock (more than "
                                  f"max_sample_lead) refused")
             return None
-        for name, value in sample.items():
-            source, bound = PLAUSIBLE_RANGE.get(name, (None, math.inf))
+        for name, source, bound in stream.bounds:
+            value = sample[name]
             if abs(value) > bound:
                 self.gate(source, value, 1.0, 0.0, bound)
                 return None
         if stream in self._held:
             self.note(f"{stream.prefix}: a held sample was replaced before it was due")
         if lead > 0.0:
-            self._step_flags |= Status.SAMPLE_HELD
+            self._step_flags |= STEP_BITS.SAMPLE_HELD
         self._seen.add(stream.prefix)
         return sample
 
@@ -546,7 +567,7 @@ class Estimator(Component):
         the sample accepted."""
         self.reset_height(source, innovation, variance)
         self.n_height_resets += 1
-        self._step_flags |= Status.HEIGHT_RESET
+        self._step_flags |= STEP_BITS.HEIGHT_RESET
         self.note(f"{source}: {reason}; height reset by {innovation:.4g} m to this source "
                   f"(reset {self.n_height_resets})")
         self.accept(source)
@@ -587,8 +608,8 @@ class Estimator(Component):
 
     def _mark(self, source: str, bit: SourceBit) -> None:
         """Set ``bit`` (FUSED or REJECTED) of ``source`` and clear the other."""
-        fused, rejected = source_bit(source, SourceBit.FUSED), source_bit(source,
-                                                                         SourceBit.REJECTED)
+        fused = _SOURCE_BITS[source, SourceBit.FUSED]
+        rejected = _SOURCE_BITS[source, SourceBit.REJECTED]
         self._source_status &= ~(fused | rejected)
         self._source_status |= fused if bit is SourceBit.FUSED else rejected
 
@@ -597,8 +618,8 @@ class Estimator(Component):
         flags = self._step_flags
         aided = self.time - self._last_aiding <= self.params.aiding_timeout
         if self.started:
-            flags |= Status.INITIALIZED
+            flags |= STEP_BITS.INITIALIZED
             if not aided:
-                flags |= Status.DEAD_RECKONING
+                flags |= STEP_BITS.DEAD_RECKONING
         self.h_valid = bool(self.started and aided)
-        self.status = int(flags) | self._source_status
+        self.status = flags | self._source_status
