@@ -72,8 +72,8 @@ SHORT_ENGINE_RUNS = {
     **{name: 30.0 for name in ENGINE_SYSTEMS if name.startswith("xu2016_")},
     **{name: 40.0 for name in ("fault_flight", "fault_flight_baro_step",
                                "fault_demo_altitude_ekf", "yang2020_altitude_ekf",
-                               "yang2020_baseline", "sensors_yang2020",
-                               "replay_auterion", "replay_px4_sitl")},
+                               "yang2020_baseline", "sensors_yang2020")},
+    **{name: 20.0 for name in ("replay_auterion", "replay_px4_sitl")},
 }
 """Shorter engine runs, s, for systems whose FMUs, rates and wiring another system's full
 run already covers, to bound CI time. The four seed 004 scenarios share their FMUs and wiring
@@ -82,8 +82,11 @@ covers the take-off, the laser's range and the first switch of the height source
 flight and its baro_step variant (the fault starts at 130 s, after any engine run's end), seed
 003's loop on AltitudeEKF or BaselineKF and the fault demonstration on AltitudeEKF (``yang2020``
 and ``fault_demo_yang`` run their 120 s: the same loop and fault component on YangFusionKF,
-through the GNSS outage from 100 s), seed 003's sensors alone, and the two log replays: 40 s
-covers every sensor rate, the take-off and each estimator's start."""
+through the GNSS outage from 100 s) and seed 003's sensors alone: 40 s covers every sensor
+rate, the take-off and each estimator's start. The two log replays (seven estimators at
+0.01 s, the costliest steps): 20 s covers every logged sensor's rate (the Auterion log's
+first 29 baro, 65 GNSS and 136 laser samples) and each estimator's start. The whole-system
+containers run as long as the system's engine runs."""
 
 
 def engine_run_seconds(system: str) -> float:
@@ -703,7 +706,7 @@ def test_the_whole_system_as_one_container_fmu_matches_the_multi_fmu_run(fmus, t
     the value the loop gives it ("Loop of links ... initialized without the values its inputs
     get from the loop"): the plant's initial acceleration reads 0 (thrust 0, resting on the
     ground) where ours reads the commanded 0.2 m/s²; nothing else differs."""
-    spec = build_system(system)
+    spec = replace(build_system(system), stop_time=engine_run_seconds(system))
     container = build_container(spec, [c.name for c in spec.components], fmus,
                                 tmp_path / "Whole.fmu")
     assert fmu_problems(container.path) == []
