@@ -1,11 +1,13 @@
 """The Estimator base's generalisations: timed streams and extra (stream-less) inputs."""
 
+import copy
 import math
 from dataclasses import dataclass
 from pathlib import Path
 
 from altfusion.estimators.base import BARO, RADAR, Estimator, HealthParams, status_bits
 from altfusion.fmi import estimator_variables
+from altfusion.fmi.state import StateHeader, dump, load
 from altfusion.params import param
 
 
@@ -98,6 +100,22 @@ def test_a_sample_stamped_ahead_of_the_clock_is_held_until_due_and_an_absurd_one
     for n in range(3, 20):
         echo.do_step(n * 0.1, 0.1)
     assert len(echo.fused) == 1 and echo.n_ignored == 1
+
+
+def test_a_held_sample_survives_a_saved_and_restored_state():
+    """A host that saves the state while an early sample waits (fmi2GetFMUstate: a deep copy;
+    fmi2SerializeFMUstate: bytes) and restores it fuses that sample when due, as the
+    estimator that ran on does: the restored state holds copies of the Stream constants, so
+    nothing may be keyed by a Stream's identity."""
+    header = StateHeader("Echo", "guid", "0.1.0+x")
+    echo = Echo(step_size=0.1)
+    echo.radar_h, echo.radar_time, echo.radar_count = 12.0, 0.3, 1
+    echo.do_step(0.0, 0.1)
+    restored = [copy.deepcopy(echo), load(dump(header, echo, __name__), header, __name__)]
+    for estimator in (echo, *restored):
+        for n in (1, 2):
+            estimator.do_step(n * 0.1, 0.1)
+        assert estimator.fused == [("radar", {"radar_h": 12.0, "radar_time": 0.3})]
 
 
 def _hover_with_a_step(source: str, step: float) -> tuple[list[int], object]:

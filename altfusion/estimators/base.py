@@ -294,7 +294,9 @@ class Estimator(Component):
     def reset(self) -> None:
         self._last_count = {s.prefix: getattr(self, s.count) for s in self.streams}
         self._seen = {prefix for prefix, count in self._last_count.items() if count > 0}
-        self._held: dict[Stream, dict[str, float]] = {}
+        self._held: dict[str, dict[str, float]] = {}
+        """Samples stamped ahead of the clock, by stream prefix (a key of plain data: a
+        saved and restored state holds copies of the Stream constants, never the same ones)."""
         self.n_rejected = 0
         self.n_ignored = 0
         self.n_height_resets = 0
@@ -351,10 +353,10 @@ class Estimator(Component):
             if count != last_count[stream.prefix]:
                 sample = self._new_sample(stream, count)
                 if sample is not None:
-                    self._held[stream] = sample
-            sample = self._held.get(stream)
+                    self._held[stream.prefix] = sample
+            sample = self._held.get(stream.prefix)
             if sample is not None and self._due(sample[stream.time]):
-                del self._held[stream]
+                del self._held[stream.prefix]
                 samples[stream] = sample
         self.fuse_samples(samples)
         self._publish_health()
@@ -389,7 +391,7 @@ class Estimator(Component):
             if abs(value) > bound:
                 self.gate(source, value, 1.0, 0.0, bound)
                 return None
-        if stream in self._held:
+        if stream.prefix in self._held:
             self.note(f"{stream.prefix}: a held sample was replaced before it was due")
         if lead > 0.0:
             self._step_flags |= STEP_BITS.SAMPLE_HELD
