@@ -44,6 +44,7 @@ Deviations from the paper:
   0.96 on the fault suite's flight (N = 2).
 """
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -101,6 +102,7 @@ class WhangGAEstimator(Estimator):
         self.b, self.P_b = 0.0, p.P0_b
         self.x = np.array([p.H0, 0.0])
         self.P = np.diag([p.P0_h, p.P0_vz])
+        self._model_dt = math.nan
         self.P_error = self.P
         self._stamps: dict[str, float] = {}
         self._intervals: dict[str, float] = {}
@@ -117,8 +119,11 @@ class WhangGAEstimator(Estimator):
         self.P_a += p.Q_a * scale                                               # (17)
         self.P_b += p.Q_b * scale                                               # (18)
         if self.started:
-            F = np.array([[1.0, dt], [0.0, 1.0 - dt / p.tau]])                  # (33)
-            Q = np.array([[0.0, 0.0], [0.0, p.Q_h * scale]])
+            if dt != self._model_dt:              # the estimator's step: built once
+                self._F = np.array([[1.0, dt], [0.0, 1.0 - dt / p.tau]])        # (33)
+                self._Q = np.array([[0.0, 0.0], [0.0, p.Q_h * scale]])
+                self._model_dt = dt
+            F, Q = self._F, self._Q
             self.x, self.P = predict(self.x, self.P, F, Q)
             if p.fault_detection:
                 self.P_error = predict(self.x, self.P_error, F, Q)[1]
