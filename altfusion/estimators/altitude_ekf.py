@@ -21,7 +21,8 @@ acceleration: a constant-acceleration model (seed 003's eq. 11 with white jerk),
 walk of ``jerk_psd``, plus white acceleration of ``accel_psd`` on (h, v).
 
 Measurements (one scalar update each, Joseph form, ``kalman.update_scalar``), each at its own
-time stamp s ≤ now: the state is taken back by δ = now - s along the model,
+instant s ≤ now, its time stamp less the sensor's delay (``baro_delay``, ``gps_delay``,
+``range_delay``; 0 by default): the state is taken back by δ = now - s along the model,
 h(s) = h - δ·v + δ²/2·a and v(s) = v - δ·a, and the Jacobian row follows (H F(δ)⁻¹):
 
     baro (height_ref gps or range):  z = h(s) + d + k·(h(s) - h_c)    (h_c: height at start)
@@ -74,6 +75,11 @@ H, V, BA, D, K, T = range(6)
 """Indices of the state vector [h, v, b_a, d, k, t]."""
 
 HEIGHT_REFERENCES = ("gps", "baro", "range")
+
+
+MAX_DELAY = 0.5
+"""Longest sensor delay, s: the state is taken back along the model over the delay with its
+process noise neglected (PX4 bounds its sensor delays at 0.3-0.5 s too)."""
 
 
 @dataclass(frozen=True)
@@ -137,6 +143,16 @@ class AltitudeEKFParams(HealthParams):
                                 min=1.0)
     acc_timeout: float = param(0.5, "s", "Without an accelerometer sample for this long the "
                                          "motion model takes over", positive=True)
+    baro_delay: float = param(0.0, "s", "Time from a baro measurement to its stamp: the "
+                                        "sample is fused at baro_time - baro_delay (PX4 "
+                                        "EKF2_BARO_DELAY)", min=0.0, max=MAX_DELAY)
+    gps_delay: float = param(0.0, "s", "Time from a GNSS measurement to its stamp (PX4 "
+                                       "EKF2_GPS_DELAY; a Jacobi or ECOS master samples the "
+                                       "plant one GNSS step before the stamp)",
+                             min=0.0, max=MAX_DELAY)
+    range_delay: float = param(0.0, "s", "Time from a radio-altimeter or laser measurement to "
+                                         "its stamp (PX4 EKF2_RNG_DELAY)",
+                               min=0.0, max=MAX_DELAY)
     P0_vz: float = param(25.0, "m2/s2", "Initial vertical-speed variance", positive=True)
     P0_acc_bias: float = param(0.04, "m2/s4", "Initial accelerometer-bias variance",
                                positive=True)
@@ -251,17 +267,20 @@ class AltitudeEKF(Estimator):
             self.accept("acc")
         gps = samples.get(GPS_ALL)
         if gps is not None:
-            self._fuse_height("gps", gps["gps_h"], gps["gps_time"], self._gps_sigma(gps))
+            instant = gps["gps_time"] - self.params.gps_delay
+            self._fuse_height("gps", gps["gps_h"], instant, self._gps_sigma(gps))
             if self.started:
-                self._fuse_speed(gps["gps_vz"], gps["gps_time"])
+                self._fuse_speed(gps["gps_vz"], instant)
         baro = samples.get(BARO_ALL)
         if baro is not None:
-            self._fuse_height("baro", baro["baro_h"], baro["baro_time"], self.params.baro_noise)
+            self._fuse_height("baro", baro["baro_h"], baro["baro_time"] - self.params.baro_delay,
+                              self.params.baro_noise)
         for name, stream, sigma in (("radar", RADAR, self.params.radar_noise),
                                     ("laser", LASER, self.params.laser_noise)):
             sample = samples.get(stream)
             if sample is not None and self._range_in_use(name, sample[f"{name}_h"]):
-                self._fuse_height(name, sample[f"{name}_h"], sample[f"{name}_time"], sigma)
+                self._fuse_height(name, sample[f"{name}_h"],
+                                  sample[f"{name}_time"] - self.params.range_delay, sigma)
         self._ground_constraint()
         self._publish()
 
