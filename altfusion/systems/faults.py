@@ -20,6 +20,7 @@ from typing import Any
 from altfusion.cosim.system import ComponentSpec, Connection, Metric, SystemSpec
 from altfusion.replay.system import CATALOG_ESTIMATORS
 from altfusion.sensors.faults import PASSED_SIGNALS, STREAMS
+from altfusion.systems.error_models import FLAT_TERRAIN
 from altfusion.systems.plant import plant_components, plant_connections
 from altfusion.systems.sensors import SEED_003_SENSORS, sensor_components, sensor_connections
 from altfusion.systems.wiring import estimator_connections
@@ -202,13 +203,17 @@ TRUE_NOISE: dict[str, dict[str, Any]] = {
                     "gps_vz_noise": SEED_003_SENSORS["gnss"]["velocity_noise_std"],
                     "acc_noise": SEED_003_SENSORS["accelerometer"]["noise_std"],
                     "radar_noise": SEED_003_SENSORS["radar"]["noise_std"],
-                    "laser_noise": 0.005},
+                    "laser_noise": 0.005, **FLAT_TERRAIN},
 }
 """Each estimator's noise parameters set to the flight's sensors (seed 003 Section 4.2:
 baro 20 m, GPS 30 m, accelerometer 0.01 m/s²; YangFusionKF's defaults are these already;
 the laser keeps its 5 mm, XuSHAEKF's default; AltitudeEKF takes all of them by their
 contract names). BaoDriftEstimator's worst accepted GNSS
-variance R_worst (eq. 14) is (2σ)² of the GPS."""
+variance R_worst (eq. 14) is (2σ)² of the GPS. The flight is over flat terrain at 0 m
+(``range_terrain``'s box is a fault): YangFusionKF's ``terrain_h`` is that 0 m, and AltitudeEKF
+is told the same (``error_models.FLAT_TERRAIN``, as in the paper scenarios), so its radio
+altimeter measures the height, not a terrain it would have to learn against the 30 m GNSS
+(nominal RMS 1.24 m without, 0.57 m with it)."""
 
 ESTIMATOR_RECORD = ("h_est", "vz_est", "h_std", "h_valid", "status", "n_height_resets")
 
