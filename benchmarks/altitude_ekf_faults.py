@@ -5,10 +5,11 @@
 Each scenario of ``altfusion.systems.faults.FAULTS`` is applied to ``fault_flight`` with
 AltitudeEKF alone (given the flight's true noises and its flat terrain, ``TRUE_NOISE``), and
 scored with ``altfusion.scores`` against the same flight without a fault (the SensorFaults
-component set to ``none``, same seeds): coverage |e| <= 2 h_std outside the fault's transient, seconds
-to isolate each source the scenario expects isolated (<= 10 s), the RMS after the transient
-against 3x the nominal RMS, ``h_valid`` false within ``aiding_timeout`` when every sensor
-stops (``silent``), and finite outputs throughout. Printed one line per scenario.
+component set to ``none``, same seeds): coverage |e| <= 2 h_std outside the fault's
+transient, seconds to isolate each source the scenario expects isolated (<= 10 s), the RMS
+after the transient against 3x the nominal RMS, ``h_valid`` false within ``aiding_timeout``
+when every sensor stops (``silent``), and finite outputs throughout. Printed one line per
+scenario.
 """
 
 import math
