@@ -253,6 +253,14 @@ ECOS_KNOWN_FAILURES = {
         "at 1.4 s (a speed jump no accelerometer sample sees), the bias stays wrong until 55 s "
         "and the height resets 8 times. Re-opening the bias variance at each speed reset "
         "gives 6.4 m: the fix is a model of the sensors' delay, not done"),
+    "fault_flight_baro_step": (
+        "the 40 s run's accuracy is its start: under the Jacobi reference AltitudeEKF (told the "
+        "flight's flat terrain) starts on the 30 m GNSS at 0.2 s, one output row 25 m off "
+        "(within its 15 m h_std) before the 5 mm laser pins it, 1.26 m of its 1.38 m RMS; "
+        "under ECOS the held samples come due together and it starts on the laser: 0.54 m, "
+        "2.5x more accurate than the reference. From 1 s on the two agree (0.54 m each), but "
+        "YangFusionKF's take-off then differs (ECOS 1.76 m against 0.79 m: the take-off "
+        "fragility analysed for fault_demo_yang)"),
 }
 """System -> why ECOS does not reach the reference's accuracy there (strict xfail: the test
 fails as soon as the system passes)."""
