@@ -610,8 +610,8 @@ class Estimator(Component):
 
     def _mark(self, source: str, bit: SourceBit) -> None:
         """Set ``bit`` (FUSED or REJECTED) of ``source`` and clear the other."""
-        fused = _SOURCE_BITS[source, SourceBit.FUSED]
-        rejected = _SOURCE_BITS[source, SourceBit.REJECTED]
+        fused = source_bit(source, SourceBit.FUSED)
+        rejected = source_bit(source, SourceBit.REJECTED)
         self._source_status &= ~(fused | rejected)
         self._source_status |= fused if bit is SourceBit.FUSED else rejected
 

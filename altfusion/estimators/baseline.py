@@ -20,7 +20,6 @@ Deviations from the papers' "normal Kalman filter" (which none of them specifies
   (:meth:`reset_offset`).
 """
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -56,27 +55,28 @@ class BaselineKF(Estimator):
     Params = BaselineKFParams
     streams = (BARO, GPS)
 
+    def configure(self, clock) -> None:
+        """F and Q of one step of the estimator (white acceleration on h and v, a random walk
+        on the bias), built once: ``propagate`` is always called with this step."""
+        p, dt = self.params, clock.step_size
+        self._F = np.array([[1.0, dt, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+        self._Q = np.array([
+            [p.accel_psd * dt**3 / 3.0, p.accel_psd * dt**2 / 2.0, 0.0],
+            [p.accel_psd * dt**2 / 2.0, p.accel_psd * dt, 0.0],
+            [0.0, 0.0, p.bias_psd * dt],
+        ])
+
     def initialize_filter(self) -> None:
         p = self.params
         self.x = np.zeros(3)
         self.P = np.diag([p.P0_h, p.P0_vz, p.P0_b])
         self.bias = 0.0
         self.innovation = 0.0
-        self._model_dt = math.nan
         self._publish()
 
     def propagate(self, dt: float) -> None:
         if not self.started:
             return
-        if dt != self._model_dt:                  # the estimator's step: built once
-            p = self.params
-            self._F = np.array([[1.0, dt, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
-            self._Q = np.array([
-                [p.accel_psd * dt**3 / 3.0, p.accel_psd * dt**2 / 2.0, 0.0],
-                [p.accel_psd * dt**2 / 2.0, p.accel_psd * dt, 0.0],
-                [0.0, 0.0, p.bias_psd * dt],
-            ])
-            self._model_dt = dt
         self.x, self.P = predict(self.x, self.P, self._F, self._Q)
         self._publish()
 

@@ -44,7 +44,6 @@ Deviations from the paper:
   0.96 on the fault suite's flight (N = 2).
 """
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -96,13 +95,19 @@ class WhangGAEstimator(Estimator):
     Params = WhangParams
     streams = (BARO_T, GPS)
 
+    def configure(self, clock) -> None:
+        """F and Q of eq. (33) for one step of the estimator, built once: ``propagate`` is
+        always called with this step."""
+        p, dt = self.params, clock.step_size
+        self._F = np.array([[1.0, dt], [0.0, 1.0 - dt / p.tau]])                 # (33)
+        self._Q = np.array([[0.0, 0.0], [0.0, p.Q_h * (dt / p.adm_period)]])
+
     def initialize_filter(self) -> None:
         p = self.params
         self.a, self.P_a = 0.0, p.P0_a
         self.b, self.P_b = 0.0, p.P0_b
         self.x = np.array([p.H0, 0.0])
         self.P = np.diag([p.P0_h, p.P0_vz])
-        self._model_dt = math.nan
         self.P_error = self.P
         self._stamps: dict[str, float] = {}
         self._intervals: dict[str, float] = {}
@@ -119,14 +124,9 @@ class WhangGAEstimator(Estimator):
         self.P_a += p.Q_a * scale                                               # (17)
         self.P_b += p.Q_b * scale                                               # (18)
         if self.started:
-            if dt != self._model_dt:              # the estimator's step: built once
-                self._F = np.array([[1.0, dt], [0.0, 1.0 - dt / p.tau]])        # (33)
-                self._Q = np.array([[0.0, 0.0], [0.0, p.Q_h * scale]])
-                self._model_dt = dt
-            F, Q = self._F, self._Q
-            self.x, self.P = predict(self.x, self.P, F, Q)
+            self.x, self.P = predict(self.x, self.P, self._F, self._Q)
             if p.fault_detection:
-                self.P_error = predict(self.x, self.P_error, F, Q)[1]
+                self.P_error = predict(self.x, self.P_error, self._F, self._Q)[1]
         self.h_prior = float(self.x[0])
 
     # -------------------------------------------------------------- measurements

@@ -166,11 +166,19 @@ class XuSHAEKF(Estimator):
     Params = XuParams
     streams = (ACC, LASER, BARO, GPS)
 
+    def configure(self, clock) -> None:
+        """Φ, B and B·Bᵀ of eqs. (10)-(11) for one step of the estimator, built once:
+        ``propagate`` is always called with this step."""
+        dt = clock.step_size
+        self._Phi = np.array([[1.0, dt, -dt * dt / 2.0, 0.0], [0.0, 1.0, -dt, 0.0],
+                              [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+        self._B = np.array([[dt * dt / 2.0], [dt], [0.0], [0.0]])
+        self._BBt = self._B @ self._B.T
+
     def initialize_filter(self) -> None:
         p = self.params
         self.x = np.zeros(4)
         self.P = np.diag([p.R_baro, p.P0_vz, p.acc_bias_std**2, p.baro_bias_std**2])
-        self._model_dt = math.nan
         self.u = 0.0
         self._acc_last: float | None = None
         self._acc_diffs: deque = deque(maxlen=p.acc_window)
@@ -192,12 +200,6 @@ class XuSHAEKF(Estimator):
         if not self.started:
             return
         p = self.params
-        if dt != self._model_dt:                  # the estimator's step: built once
-            self._Phi = np.array([[1.0, dt, -dt * dt / 2.0, 0.0], [0.0, 1.0, -dt, 0.0],
-                                  [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
-            self._B = np.array([[dt * dt / 2.0], [dt], [0.0], [0.0]])
-            self._BBt = self._B @ self._B.T
-            self._model_dt = dt
         Q = self._BBt * self.acc_noise_est**2
         Q[2, 2] += p.acc_bias_psd * dt
         Q[3, 3] += p.baro_bias_psd * dt

@@ -179,6 +179,14 @@ class YangFusionKF(Estimator):
     Params = YangParams
     streams = (BARO, GPS_VZ, RADAR, ACC)
 
+    def configure(self, clock) -> None:
+        """Q of one step of the estimator (white jerk; the bias random walks with
+        ``fault_detection``), built once: ``propagate`` is always called with this step."""
+        p, dt = self.params, clock.step_size
+        walks = ((p.acc_bias_psd * dt, p.baro_bias_psd * dt) if p.fault_detection
+                 else (0.0, 0.0))
+        self._Q = constant_states_noise(white_jerk_noise(dt, p.jerk_psd), walks)
+
     def initialize_filter(self) -> None:
         p = self.params
         self.x = (0.0,) * 5
@@ -189,18 +197,11 @@ class YangFusionKF(Estimator):
         self.fused_std = 0.0
         self.weight_gps = self.weight_baro = self.weight_radar = 0.0
         self._stale: set[str] = set()
-        self._model_dt = math.nan
         self._publish()
 
     def propagate(self, dt: float) -> None:
         """Eqs. (9)-(11) with the white-jerk process noise (A of eq. 9 is the constant-
         acceleration model, written out in scalar arithmetic)."""
-        if dt != self._model_dt:                  # the estimator's step: built once
-            p = self.params
-            walks = ((p.acc_bias_psd * dt, p.baro_bias_psd * dt) if p.fault_detection
-                     else (0.0, 0.0))
-            self._Q = constant_states_noise(white_jerk_noise(dt, p.jerk_psd), walks)
-            self._model_dt = dt
         self.x, self.P = predict_constant_acceleration(self.x, self.P, dt, self._Q)
 
     def fuse_samples(self, samples) -> None:
