@@ -5,8 +5,8 @@ from altfusion.estimators import altitude_ekf
 
 
 class AltitudeEKF(fmi.CoreSlave):
-    """One Kalman filter on height, vertical speed, accelerometer bias, baro/GNSS offset, baro
-    scale factor and terrain height, fusing any subset of baro, GNSS (height, vertical speed,
+    """One Kalman filter on height, vertical speed, accelerometer bias, baro offset and scale
+    factor, terrain height and GNSS offset, fusing any subset of baro, GNSS (height, vertical speed,
     VDOP, satellites), accelerometer, radio altimeter and laser, each sample at its own time
     stamp, after PX4 EKF2's height fusion."""
 
@@ -14,10 +14,9 @@ class AltitudeEKF(fmi.CoreSlave):
     variables = fmi.estimator_variables(core_class.streams, (
         fmi.Output("vz_std", "m/s", "1σ of vz_est"),
         fmi.Output("acc_bias", "m/s2", "Accelerometer-bias estimate b_a"),
-        fmi.Output("baro_bias", "m", "Baro offset d from the GNSS datum (0 with height_ref "
-                                     "baro)"),
-        fmi.Output("gps_bias", "m", "GNSS offset d from the baro datum (height_ref baro, "
-                                    "else 0)"),
+        fmi.Output("baro_bias", "m", "Baro offset d: baro_h = h + d + k·(h - h_c) (0 with "
+                                     "height_ref baro)"),
+        fmi.Output("gps_bias", "m", "GNSS offset g: gps_h = h + g (0 with height_ref gps)"),
         fmi.Output("baro_scale", "1", "Baro scale factor k: baro error k·(h - h_c)"),
         fmi.Output("terrain_est", "m", "Terrain-height estimate under the rangefinders"),
         fmi.Output("terrain_std", "m", "1σ of terrain_est"),

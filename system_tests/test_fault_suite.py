@@ -80,12 +80,6 @@ KNOWN_FAILURES: dict[tuple[str, str, str], str] = {
         "standard deviation) is an error no sensor contradicts beyond its noise: it enters "
         "the height with the GNSS's weight against the radio altimeter (0.1), 0.82 m RMS "
         "against 3x nominal 0.76 m"),
-    ("recovery", "all_fail", "AltitudeEKF"): (
-        "the baro's +5 m and the GNSS's +10 m together (each well within one sample's 20 m and "
-        "30 m noise, below the bias test's 5 sigma over 2.5 s) are errors no sensor "
-        "contradicts beyond its noise: they enter AltitudeEKF's height with their weights "
-        "against the radio altimeter over the known flat terrain, 1.0 m RMS against 3x "
-        "nominal 0.82 m (YangFusionKF: 0.82 against 0.76 m)"),
 }
 """(criterion, fault, estimator) -> why the cell fails today (docs/faults.md, "Results")."""
 

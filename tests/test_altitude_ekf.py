@@ -358,6 +358,25 @@ def test_height_ref_range_holds_the_ground_under_the_first_range_sample():
     assert abs(ends["gps"][1]) < 0.5
 
 
+def test_height_ref_range_takes_a_gnss_offset_into_its_own_state():
+    """height_ref range (PX4 EKF2_HGT_REF range: every other height source has an offset of
+    its own): a GNSS reading 20 m high from the start (a datum offset, as an ellipsoid
+    height against the local ground) is taken up by its offset state g, not by the height:
+    after 60 s gps_bias is within 0.5 m of 20 m (its steady-state σ is
+    (gps_bias_psd·R/f)^¼ = 0.1 m: 5σ) and the height within 5 cm of the truth (5 laser σ),
+    the GNSS never isolated. With height_ref gps the GNSS is the datum: the height and the
+    terrain take the 20 m instead (within 0.5 m)."""
+    ends = {}
+    for ref in ("range", "gps"):
+        flight, rows = Flight(height_ref=ref), []
+        flight.fly(60.0, laser=0.0, gps=20.0, record=rows)
+        assert not any(r[4] & source_bit("gps", SourceBit.ISOLATED) for r in rows), ref
+        ends[ref] = (flight.ekf.h_est - TRUE_H, flight.ekf.gps_bias, flight.ekf.terrain_est)
+    assert abs(ends["range"][0]) < 0.05 and abs(ends["range"][1] - 20.0) < 0.5
+    assert abs(ends["gps"][0] - 20.0) < 0.5 and abs(ends["gps"][2] - 20.0) < 0.5
+    assert ends["gps"][1] == 0.0
+
+
 def test_ground_effect_dead_zone_ignores_negative_baro_innovations_near_the_ground():
     """PX4 EKF2_GND_EFF_DZ: within ground_effect_height of the ground a baro reading 1.5 m
     low (rotor wash; within its gate) is ignored within a 4 m dead zone: the baro offset

@@ -3,18 +3,20 @@
 The model, its equations and every deviation from PX4 EKF2 / ArduPilot EKF3 are written up in
 ``docs/altitude_ekf.md``; this docstring is the short form.
 
-State x = [h, v, b_a, d, k, t]: height (m, in the datum of the reference source), vertical
-speed (m/s), accelerometer bias (m/s²), the offset d (m) of the non-reference one of baro and
-GNSS, the barometer's scale factor k (1) and the terrain height t (m) under the rangefinders.
+State x = [h, v, b_a, d, k, t, g]: height (m, in the datum of the reference source), vertical
+speed (m/s), accelerometer bias (m/s²), the baro's offset d (m), its scale factor k (1), the
+terrain height t (m) under the rangefinders and the GNSS's offset g (m). The reference source
+has no offset: ``height_ref`` baro freezes d and k at 0, gps freezes g, range freezes t (PX4
+EKF2: a bias estimator for every height source but the reference).
 
 Time update over the estimator's step Δ, the accelerometer as input (PX4: the IMU drives the
 prediction), a = acc_z - b_a, acc_z the mean of two samples that bound the step (else the
 latest one, held):
 
-    h⁺ = h + Δ·v + Δ²/2·a,   v⁺ = v + Δ·a,   b_a, d, k, t: random walks
+    h⁺ = h + Δ·v + Δ²/2·a,   v⁺ = v + Δ·a,   b_a, d, k, t, g: random walks
     Q: white acceleration of PSD acc_noise²·T_acc on (h, v), T_acc the accelerometer's
-       sample period, at least Δ; acc_bias_psd, baro_bias_psd, baro_scale_psd and
-       terrain_psd on the others (``height_ref`` "baro" freezes k; "range" freezes t)
+       sample period, at least Δ; acc_bias_psd, baro_bias_psd, baro_scale_psd,
+       terrain_psd and gps_bias_psd on the others (0 on the reference's frozen states)
 
 Without an accelerometer acc_z is taken as 0, so that b_a carries minus the vehicle's
 acceleration: a constant-acceleration model (seed 003's eq. 11 with white jerk), b_a a random
@@ -25,9 +27,8 @@ instant s ≤ now, its time stamp less the sensor's delay (``baro_delay``, ``gps
 ``range_delay``; 0 by default): the state is taken back by δ = now - s along the model,
 h(s) = h - δ·v + δ²/2·a and v(s) = v - δ·a, and the Jacobian row follows (H F(δ)⁻¹):
 
-    baro (height_ref gps or range):  z = h(s) + d + k·(h(s) - h_c)    (h_c: height at start)
-    baro (height_ref baro):          z = h(s)
-    GNSS height:  z = h(s)  (z = h(s) - d with height_ref baro),
+    baro:  z = h(s) + d + k·(h(s) - h_c)    (h_c: height at start; d = k = 0: height_ref baro)
+    GNSS height:  z = h(s) + g    (g = 0: height_ref gps),
                   σ = gps_noise·(VDOP/gps_vdop_ref)·√max(1, gps_nsat_ref/N)  (seed 001)
     GNSS vertical speed:  z = v(s);   radar, laser:  z = h(s) - t
 
@@ -71,8 +72,9 @@ from altfusion.estimators.base import (
 from altfusion.estimators.kalman import shift_state, update_scalar
 from altfusion.params import param
 
-H, V, BA, D, K, T = range(6)
-"""Indices of the state vector [h, v, b_a, d, k, t]."""
+H, V, BA, D, K, T, G = range(7)
+N = 7
+"""Indices and size of the state vector [h, v, b_a, d, k, t, g]."""
 
 HEIGHT_REFERENCES = ("gps", "baro", "range")
 
@@ -104,8 +106,10 @@ class AltitudeEKFParams(HealthParams):
     acc_bias_psd: float = param(1e-5, "m2/s5", "PSD of the accelerometer-bias random walk "
                                                "(PX4 EKF2_ACC_B_NOISE 0.003 m/s³ squared)",
                                 min=0.0)
-    baro_bias_psd: float = param(0.01, "m2/s", "PSD of the random walk of the baro/GNSS "
-                                               "offset d", min=0.0)
+    baro_bias_psd: float = param(0.01, "m2/s", "PSD of the random walk of the baro offset d "
+                                               "(height_ref gps or range)", min=0.0)
+    gps_bias_psd: float = param(0.01, "m2/s", "PSD of the random walk of the GNSS offset g "
+                                              "(height_ref baro or range)", min=0.0)
     baro_scale_psd: float = param(1e-9, "1/s", "PSD of the random walk of the baro scale "
                                                "factor k", min=0.0)
     terrain_psd: float = param(0.01, "m2/s", "PSD of the terrain-height random walk",
@@ -156,7 +160,7 @@ class AltitudeEKFParams(HealthParams):
     P0_vz: float = param(25.0, "m2/s2", "Initial vertical-speed variance", positive=True)
     P0_acc_bias: float = param(0.04, "m2/s4", "Initial accelerometer-bias variance",
                                positive=True)
-    P0_offset: float = param(100.0, "m2", "Variance of the offset d before its source's "
+    P0_offset: float = param(100.0, "m2", "Variance of an offset d or g before its source's "
                                           "first sample", positive=True)
     P0_scale: float = param(1e-4, "1", "Initial variance of the baro scale factor",
                             min=0.0)
@@ -180,25 +184,28 @@ class AltitudeEKF(Estimator):
 
     def initialize_filter(self) -> None:
         p = self.params
-        self.x = [0.0, 0.0, 0.0, 0.0, 0.0, p.terrain_h]
-        self.P = [[0.0] * 6 for _ in range(6)]
-        for i, var in ((V, p.P0_vz), (BA, p.P0_acc_bias), (D, p.P0_offset),
-                       (K, 0.0 if p.height_ref == "baro" else p.P0_scale),
-                       (T, p.P0_terrain)):
+        self.x = [0.0, 0.0, 0.0, 0.0, 0.0, p.terrain_h, 0.0]
+        self.P = [[0.0] * N for _ in range(N)]
+        baro_ref, gps_ref = p.height_ref == "baro", p.height_ref == "gps"
+        for i, var in ((V, p.P0_vz), (BA, p.P0_acc_bias),
+                       (D, 0.0 if baro_ref else p.P0_offset),
+                       (K, 0.0 if baro_ref else p.P0_scale), (T, p.P0_terrain),
+                       (G, 0.0 if gps_ref else p.P0_offset)):
             self.P[i][i] = var
-        self._q_rw = [0.0, 0.0, 0.0, p.baro_bias_psd,
-                      0.0 if p.height_ref == "baro" else p.baro_scale_psd,
-                      0.0 if p.height_ref == "range" else p.terrain_psd]
+        self._q_rw = [0.0, 0.0, 0.0, 0.0 if baro_ref else p.baro_bias_psd,
+                      0.0 if baro_ref else p.baro_scale_psd,
+                      0.0 if p.height_ref == "range" else p.terrain_psd,
+                      0.0 if gps_ref else p.gps_bias_psd]
         self.h_c = 0.0
         self._acc = None                  # (stamp, value) of the last accelerometer sample
         self._acc_used = False
         self._acc_period = 0.0            # between the last two accelerometer samples
-        self._offset_known = False        # d set by its source's first sample
+        self._offset_known = {"baro": False, "gps": False}   # set by the first sample
         self._terrain_known = False
         self._range_on = {"radar": True, "laser": True}
         self._range_rejected_since: dict[str, float] = {}
         self._nis = {}
-        self._reference = "baro" if p.height_ref == "baro" else "gps"
+        self._reference = p.height_ref if p.height_ref != "range" else None
         self._reference_rejected_since: float | None = None
         self._reference_sample = (0.0, 0.0, 1.0)       # its last rejected (z, stamp, σ)
         self._reference_seen = False
@@ -246,7 +253,7 @@ class AltitudeEKF(Estimator):
         for i, psd in enumerate(self._q_rw):
             P[i][i] += psd * dt
         P[BA][BA] += (p.acc_bias_psd if acc_on else p.jerk_psd) * dt
-        for j in range(6):                                # exact symmetry
+        for j in range(N):                                # exact symmetry
             P[j][H], P[j][V] = P[H][j], P[V][j]
         self.x, self.P = x, P
 
@@ -254,7 +261,7 @@ class AltitudeEKF(Estimator):
         """The accelerometer came or went: b_a changes meaning (its bias, or minus the
         motion model's acceleration) and restarts from its prior, uncorrelated."""
         self.x[BA] = 0.0
-        for j in range(6):
+        for j in range(N):
             self.P[BA][j] = self.P[j][BA] = 0.0
         self.P[BA][BA] = self.params.P0_acc_bias
         self.note(f"accelerometer {'back' if acc_on else 'lost'}: "
@@ -349,8 +356,8 @@ class AltitudeEKF(Estimator):
             scale = 1.0 + x[K]
             return (h_s + x[D] + x[K] * (h_s - self.h_c),
                     [*((i, scale * c) for i, c in row_h), (D, 1.0), (K, h_s - self.h_c)])
-        if source == "gps" and ref == "baro":
-            return h_s - x[D], [*row_h, (D, -1.0)]
+        if source == "gps" and ref != "gps":
+            return h_s + x[G], [*row_h, (G, 1.0)]
         return h_s, list(row_h)
 
     def _fuse_height(self, source: str, z: float, stamp: float, sigma: float) -> None:
@@ -368,7 +375,7 @@ class AltitudeEKF(Estimator):
         S = sum(c * sum(c2 * self.P[i][j] for j, c2 in row) for i, c in row) + R
         if source in ("radar", "laser") and self._terrain_step(source, z, y, S):
             return
-        if source == self._reference and self.params.height_ref != "range":
+        if source == self._reference:
             if self._reference_step(source, y, S):
                 return
             self._reference_sample = (z, stamp, sigma)
@@ -484,27 +491,34 @@ class AltitudeEKF(Estimator):
                 self._adaptation(source)
 
     # ------------------------------------------------------------------ start and resets
+    def _offset_index(self, source: str) -> int | None:
+        """The state that offsets ``source``'s reading from the height: z = h + d (baro),
+        z = h + g (GNSS), z = h - t (rangefinders); None for the height reference."""
+        if source in ("radar", "laser"):
+            return T
+        if source == self.params.height_ref:
+            return None
+        return D if source == "baro" else G
+
     def _start(self, source: str, z: float, sigma: float) -> None:
-        """The first height sample starts the filter: h = z minus the source's offset (0),
-        with the offset's prior variance in Var h and their correlation."""
+        """The first height sample starts the filter: h = z less the source's offset (its
+        prior), with the offset's prior variance in Var h and their correlation."""
         x, P = self.x, self.P
         R = sigma * sigma
-        offset = {"radar": T, "laser": T}.get(source)
-        if (source == "baro") != (self.params.height_ref == "baro"):
-            offset = D
+        offset = self._offset_index(source)
         x[H] = z
         P[H][H] = R
         if offset == T and self.params.height_ref == "range":
             P[T][T] = 0.0                                 # the terrain is the datum
         if offset is not None:
-            sign = -1.0 if source == "baro" else 1.0   # h = z - d (baro), z + d, z + t
-            x[H] = z + sign * x[offset]
+            sign = -1.0 if offset == T else 1.0           # z = h + sign·offset
+            x[H] = z - sign * x[offset]
             P[H][H] += P[offset][offset]
-            P[H][offset] = P[offset][H] = sign * P[offset][offset]
+            P[H][offset] = P[offset][H] = -sign * P[offset][offset]
             if offset == T:
                 self._terrain_known = True
             else:
-                self._offset_known = True
+                self._offset_known[source] = True
         self.h_c = x[H]
         self._reference_seen = source == self._reference
         self.started = True
@@ -512,35 +526,36 @@ class AltitudeEKF(Estimator):
 
     def _first_sample(self, source: str, z: float, sigma: float) -> bool:
         """The first sample of the reference after a start from another source: see
-        :meth:`_first_reference`. The first sample of the source of d, or of a rangefinder,
-        that disagrees with the
-        state's prior (``P0_offset``, ``P0_terrain``: beyond the gate) sets its offset state
-        (d = z - h or t = h - z, uncorrelated, Var = Var h + R) and is consumed; one that
-        agrees is fused as any sample (a calibrated baro, a known terrain). With
-        ``height_ref`` range the first range sample always sets the terrain, which is the
-        datum from then on (variance 0). True if consumed."""
+        :meth:`_first_reference`. The first sample of the source of an offset state (d, g
+        or the rangefinders' t) that disagrees with the state's prior (``P0_offset``,
+        ``P0_terrain``: beyond the gate) sets that state (d = z - h, g = z - h or
+        t = h - z, uncorrelated, Var = Var h + R) and is consumed; one that agrees is fused
+        as any sample (a calibrated baro, a known terrain). With ``height_ref`` range the
+        terrain is the datum from the first range sample on (variance 0): set by it if it
+        disagrees with the prior, else the prior itself. True if consumed."""
         if source == self._reference and not self._reference_seen:
             self._reference_seen = True
             return self._first_reference(z, sigma)
-        is_offset = (source == "baro") != (self.params.height_ref == "baro") \
-            and source in ("baro", "gps")
-        if is_offset and not self._offset_known:
-            index, value = D, (z - self.x[H]) * (1.0 if source == "baro" else -1.0)
-            self._offset_known = True
-        elif source in ("radar", "laser") and not self._terrain_known:
-            index, value = T, self.x[H] - z
+        index = self._offset_index(source)
+        if index == T and not self._terrain_known:
             self._terrain_known = True
+        elif index in (D, G) and not self._offset_known[source]:
+            self._offset_known[source] = True
         else:
             return False
+        value = self.x[H] - z if index == T else z - self.x[H]
         sigmas = self.params.gate_sigma
         y = value - self.x[index]                         # against the state's prior
+        consistent = y * y <= sigmas * sigmas * (self.P[index][index] + self.P[H][H]
+                                                 + sigma * sigma)
         frozen = index == T and self.params.height_ref == "range"
-        if not frozen and y * y <= sigmas * sigmas * (self.P[index][index] + self.P[H][H]
-                                                      + sigma * sigma):
-            return False                                  # consistent: fused as any sample
-        self.x[index] = value
-        for j in range(6):
+        if consistent and not frozen:
+            return False                                  # fused as any sample
+        for j in range(N):
             self.P[index][j] = self.P[j][index] = 0.0
+        if consistent:
+            return False                                  # the datum: its prior
+        self.x[index] = value
         self.P[index][index] = 0.0 if frozen else self.P[H][H] + sigma * sigma
         self.accept(source)
         return True
@@ -559,8 +574,11 @@ class AltitudeEKF(Estimator):
         if y * y <= self.params.gate_sigma**2 * S:
             return False
         self.x[H] += y
-        self.x[D] += y if self.params.height_ref == "baro" else -y
         self.x[T] += y
+        for source in ("baro", "gps"):
+            offset = self._offset_index(source)
+            if offset is not None:
+                self.x[offset] -= y
         self.note(f"{self._reference}: first sample of the height reference {y:.4g} m from "
                   f"the height: datum moved onto it")
         return False                                      # then fused, in agreement
@@ -573,19 +591,19 @@ class AltitudeEKF(Estimator):
         i = V if source == "gps_vz" else H
         shift_state(self.x, self.P, i, innovation, variance)
         if i == H:                        # the other sources' offsets: learnt anew
-            owner = "gps" if self.params.height_ref == "baro" else "baro"
-            self._offset_known = self._offset_known and source == owner
+            for owner, known in self._offset_known.items():
+                self._offset_known[owner] = known and source == owner
             self._terrain_known = self._terrain_known and source in ("radar", "laser")
         self._publish()
 
     def _publish(self) -> None:
-        x, P, ref = self.x, self.P, self.params.height_ref
+        x, P = self.x, self.P
         self.h_est, self.vz_est = x[H], x[V]
         self.h_std = math.sqrt(max(P[H][H], 0.0))
         self.vz_std = math.sqrt(max(P[V][V], 0.0))
         self.acc_bias = x[BA] if self._acc_used else 0.0
-        self.baro_bias = x[D] if ref != "baro" else 0.0
-        self.gps_bias = x[D] if ref == "baro" else 0.0
+        self.baro_bias = x[D]
+        self.gps_bias = x[G]
         self.baro_scale = x[K]
         self.terrain_est = x[T]
         self.terrain_std = math.sqrt(max(P[T][T], 0.0))
