@@ -28,12 +28,22 @@ NOISE = {"baro_noise": 0.5, "gps_noise": 0.3, "gps_vz_noise": 0.1, "acc_noise": 
          "laser_noise": 0.01}
 
 
+def core_estimator(params: dict) -> AltitudeEKF:
+    """The core object with ``params``, stepped every STEP."""
+    return AltitudeEKF(AltitudeEKF.Params(**params), step_size=STEP)
+
+
 class Flight:
     """A seeded hover: ``fly(seconds, baro=..., gps=..., ...)`` with each sensor's error
-    (None: the sensor delivers nothing)."""
+    (None: the sensor delivers nothing).
+
+    ``make_estimator`` builds what is flown from the parameters: the core object here; the
+    FMU in system_tests/test_altitude_ekf_px4.py, which flies PX4's cases again through it."""
+
+    make_estimator = staticmethod(core_estimator)
 
     def __init__(self, seed: int = 1, **params):
-        self.ekf = AltitudeEKF(AltitudeEKF.Params(**{**NOISE, **params}), step_size=STEP)
+        self.ekf = self.make_estimator({**NOISE, **params})
         self.feed = StreamFeeder(self.ekf)
         self.rng = np.random.default_rng(seed)
         self.t = 0.0
