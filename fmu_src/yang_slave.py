@@ -17,6 +17,8 @@ class YangFusionKF(fmi.CoreSlave):
         fmi.Output("acc_bias", "m/s2", "Accelerometer-bias estimate (0 without "
                                        "fault_detection: the paper's filter has none)"),
         fmi.Output("baro_bias", "m", "Baro-offset estimate d (0 without fault_detection)"),
+        fmi.Output("gps_bias", "m", "GPS height-offset estimate (0 unless gps_bias_psd > 0, "
+                                    "with fault_detection)"),
         fmi.Output("weight_gps", "1", "Weight ω of GPS in the last fusion (0: not live)"),
         fmi.Output("weight_baro", "1", "Weight ω of the baro in the last fusion"),
         fmi.Output("weight_radar", "1", "Weight ω of the radio altimeter in the last fusion"),

@@ -74,12 +74,6 @@ KNOWN_FAILURES: dict[tuple[str, str, str], str] = {
     ("recovery", "gnss_step", "HajiyevAdaptiveEstimator"): HAJIYEV_GNSS,
     ("recovery", "all_fail", "BaselineKF"): NO_THIRD_SENSOR,
     ("recovery", "all_fail", "XuSHAEKF"): NO_THIRD_SENSOR,
-    ("recovery", "all_fail", "YangFusionKF"): (
-        "YangFusionKF's baro-offset state takes up the baro's +5 m, but the GNSS's +10 m (a "
-        "third of one sample's 30 m noise; the bias test's mean over 2.5 s has a 6 m "
-        "standard deviation) is an error no sensor contradicts beyond its noise: it enters "
-        "the height with the GNSS's weight against the radio altimeter (0.1), 0.82 m RMS "
-        "against 3x nominal 0.76 m"),
 }
 """(criterion, fault, estimator) -> why the cell fails today (docs/faults.md, "Results")."""
 
