@@ -39,12 +39,15 @@ ISOLATION_DEADLINE = 10.0
 AIDING_TIMEOUT = 5.0
 RECORD_INTERVAL = 0.1
 
-HAJIYEV_GNSS = ("HajiyevAdaptiveEstimator gates the GNSS on the jump of its residual from the "
-                "last accepted one (its adaptation must follow the baro drift): the first "
-                "sample after a step inside the 4-sigma jump gate (204 m with this flight's "
-                "noises) becomes the reference, and the adaptive factor (eq. 30) takes the "
-                "residual for baro drift (gain about 0.9 at the first stepped sample): no "
-                "persistent innovation; the height follows the GNSS (102 m RMS after gnss_step)")
+HAJIYEV_GNSS = ("HajiyevAdaptiveEstimator gates the GNSS on its residual's innovation against a "
+                "Kalman estimate of the residual's mean, a random walk of drift_psd 1 m²/s "
+                "(seed 002's baro drift of about 1 m/s): over the 100 s outage that reference's "
+                "variance grows to about 111 m², so each returning sample moves it by 8 % of "
+                "its innovation, and 50 m is at most 50/√(111 + 1300/25) = 3.9 standard "
+                "deviations over the bias test's 2.5 s, whose threshold is 4 (at the paper's "
+                "1 m/s the baro may drift 100 m in 100 s: the GPS-minus-baro residual cannot "
+                "tell this offset from drift); the GNSS is not isolated and the height follows "
+                "it (47.2 m RMS after the return, within 3x nominal 67 m)")
 REFERENCE_GNSS = ("the estimator takes the GNSS as its height reference (a baro bias state "
                   "absorbs the rest): GNSS +10 m is a 10 m height error, beyond 3x the nominal "
                   "RMS (PX4 with GNSS as reference does the same)")
@@ -55,9 +58,7 @@ NO_THIRD_SENSOR = (REFERENCE_GNSS + ". Both errors lie within one sample's noise
                    "(BaselineKF 9.3 m, XuSHAEKF 6.1 m RMS)")
 
 KNOWN_FAILURES: dict[tuple[str, str, str], str] = {
-    ("isolation", "gnss_step", "HajiyevAdaptiveEstimator"): HAJIYEV_GNSS,
     ("isolation", "gnss_outage_return_off", "HajiyevAdaptiveEstimator"): HAJIYEV_GNSS,
-    ("recovery", "gnss_step", "HajiyevAdaptiveEstimator"): HAJIYEV_GNSS,
     ("recovery", "all_fail", "BaselineKF"): NO_THIRD_SENSOR,
     ("recovery", "all_fail", "XuSHAEKF"): NO_THIRD_SENSOR,
 }

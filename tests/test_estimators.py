@@ -129,6 +129,36 @@ def test_hajiyev_drift_adaptive_stays_near_gps_level_non_adaptive_diverges():
     assert abs(plain[-100:]).mean() > 300.0
 
 
+def test_hajiyev_isolates_a_gps_step_and_falls_back_to_the_baro_offset():
+    """The fault flight's noises (baro 20 m at 20 Hz, GPS 30 m at 10 Hz), a constant height and
+    a GPS step of +100 m at 30 s. The bias test averages the ~25 GPS innovations of its 2.5 s
+    window against the reference Δ̄, spread √((R_B + R_GPS + P̄)/25) ≈ 7.2 m (P̄ ≈ 11.4 m²,
+    the steady state): it fires once the window's mean passes 4 × 7.2 = 29 m, after about 8
+    stepped samples, and 16 push the mean 5 spreads (36 m) beyond that; with 2.5 s of
+    rejection the GPS is isolated by 1.6 + 2.5 s after the step: 5 s allowed. It must not be
+    isolated before. Isolated, the estimate is h_B + Δ̄: over the next 10 s its mean error is
+    what Δ̄ took of the step (0.88 m per fused stepped sample at the gain √(0.1/1300), at most
+    16 samples: 14 m) plus Δ̄'s error and the mean baro noise, standard deviation
+    √(P̄ + R_B/200) = 3.7 m: 14 + 5 × 3.7 = 33 m, against the step's 100 m (the old jump
+    gate followed the step: about 90 m)."""
+    rng = np.random.default_rng(7)
+    estimator = HajiyevAdaptiveEstimator(HajiyevParams(R_baro=400.0, R_gps=900.0),
+                                         step_size=0.05)
+    feeder = StreamFeeder(estimator)
+    isolated_at, errors = None, []
+    for n in range(1, 1001):
+        t = 0.05 * n
+        gps = 30.0 * rng.standard_normal() + (100.0 if t > 30.0 else 0.0)
+        feeder.step(**baro_gps(baro=20.0 * rng.standard_normal(),
+                               gps=gps if n % 2 == 0 else None))
+        if isolated_at is None and estimator.status & source_bit("gps", SourceBit.ISOLATED):
+            isolated_at = t
+        if isolated_at is not None and t <= isolated_at + 10.0:
+            errors.append(estimator.h_est)
+    assert isolated_at is not None and 30.0 < isolated_at <= 35.0
+    assert abs(np.mean(errors)) < 33.0
+
+
 @pytest.mark.parametrize("cls", [HajiyevAdaptiveEstimator, WhangGAEstimator])
 def test_gps_before_the_first_baro_sample_is_not_fused(cls):
     """In a replayed log GPS may arrive first (Auterion log: 3.5 ms before the baro). Fused

@@ -473,7 +473,7 @@ class Estimator(Component):
         self._mark(source, SourceBit.REJECTED)
         if (now - since >= p.reset_timeout
                 and (biased or self.contradicted(source, innovation))
-                and not self._source_status & source_bit(source, SourceBit.ISOLATED)):
+                and not self.isolated(source)):
             self._source_status |= source_bit(source, SourceBit.ISOLATED)
             self.note(f"{source}: rejected for {now - since:.3g} s while other sources are "
                       f"fused: isolated until a sample passes the gate")
@@ -494,7 +494,7 @@ class Estimator(Component):
         p, now = self.params, self.time
         window = self._innovations.get(source)
         if not (p.fault_detection and source in HEIGHT_SOURCES
-                and self._source_status & source_bit(source, SourceBit.ISOLATED)
+                and self.isolated(source)
                 and now - since >= 2.0 * p.reset_timeout
                 and window is not None and window.n >= BIAS_MIN_SAMPLES
                 and (all(y > 0.0 for _, y, _ in window.samples)
@@ -541,7 +541,7 @@ class Estimator(Component):
         half_width = sigmas * math.sqrt(max(variance, 0.0))
         window.add(now, min(max(innovation, -half_width), half_width), variance, timeout)
         mean, spread = window.mean(), math.sqrt(window.mean_variance())
-        if self._source_status & source_bit(source, SourceBit.ISOLATED):
+        if self.isolated(source):
             biased = window.n >= BIAS_MIN_SAMPLES and abs(mean) > READMIT_SIGMAS * spread
         else:
             biased = window.n >= BIAS_MIN_SAMPLES and abs(mean) > sigmas * spread and any(
@@ -590,6 +590,10 @@ class Estimator(Component):
         if aids_height and source in HEIGHT_SOURCES:
             self._last_aiding = self.time
             self._last_fused[source] = self.time
+
+    def isolated(self, source: str) -> bool:
+        """True while height source ``source`` is isolated (its ISOLATED bit in ``status``)."""
+        return bool(self._source_status & source_bit(source, SourceBit.ISOLATED))
 
     def contradicted(self, source: str, innovation: float) -> bool:
         """True if another height source, fused within ``reset_timeout`` and passing its

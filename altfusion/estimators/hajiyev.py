@@ -23,15 +23,40 @@ Deviations from the paper:
 
 * between GPS samples the variance grows by ``drift_psd`` per second, so that ``h_std`` stays
   honest through GPS outages;
-* GPS gate: a sample whose residual jumps by more than ``gate_sigma`` standard deviations from
-  the last accepted residual is rejected and logged (outliers are jumps, while the drift the
-  adaptation follows is gradual; a gate on the residual itself would reject that drift);
+* GPS gate: a sample is gated on the innovation of its residual Δ (eq. 18) against a reference
+  Δ̄ of accepted residuals, in standard deviations ``gate_sigma`` of P̄ + R_B + R_GPS (P̄ the
+  reference's variance; R_B + R_GPS the variance of Δ, the threshold of condition 28). Without
+  ``fault_detection`` Δ̄ is the last accepted residual (P̄ = R_B + R_GPS): a gate on Δ's jump
+  (outliers are jumps, while the drift the adaptation follows is gradual; a gate on Δ itself
+  would reject that drift). A jump gate cannot isolate a GPS step: the first stepped sample
+  inside it (204 m with the fault flight's noises) becomes the reference and the innovations
+  the bias test averages (estimators/base.py) are jumps again, zero-mean. With
+  ``fault_detection`` Δ̄ is the Kalman estimate of Δ's mean, modelled as the random walk of
+  PSD ``drift_psd`` that the baro drift is (seed 002: about 1 m/s, a walk of 1 m²/s at its
+  1 s samples, error_models.HAJIYEV_DRIFT_RATE) measured with variance R_B + R_GPS. Its
+  innovations are white with exactly the variance passed, as the bias test assumes; its
+  steady-state gain is about √(drift_psd·T/(R_B + R_GPS)) at a GPS period T (0.06 at seed
+  002's 1 s: time constant 16 s, so a 1 m/s ramp lags 15 m, one innovation standard
+  deviation; 0.009 at the fault flight's 0.1 s). A step therefore stays in the innovations
+  (a 100 m GPS step loses 0.9 m per fused sample) and is rejected by the bias test and
+  isolated. A GPS back 50 m off after a 100 s outage is not: P̄ has grown by 100 m² (the
+  baro may have drifted 10 m in the model, 100 m at the paper's 1 m/s), the first returning
+  samples take 8 % of their innovation each, and 50 m is at most 50/√(P̄ + R/25) = 3.9
+  standard deviations over the bias test's 2.5 s even against a frozen reference: not a
+  fault that the residual between baro and GPS can tell from drift;
+* a GPS sample rejected while the GPS is isolated (with ``fault_detection``) sets the
+  estimate to h_B + Δ̄, variance R_B + P̄: the held correction K·Δ of the last accepted
+  sample (eq. 15) may carry the fault (the adaptive gain of eqs. 27, 30 is about 0.9 for a
+  100 m residual), while Δ̄ is the baro's offset from the GPS level that the accepted
+  samples give; a rejected outlier leaves the held correction;
 * baro gate: a baro sample that jumps from the last accepted one by more than ``gate_sigma``
   standard deviations of the jump (2 R_B and ``max_vz``) is rejected;
 * GPS samples that arrive before the first baro sample are not fused (eq. 18 needs h_B; in a
   replayed log GPS may come first);
 * health (estimators/base.py): a baro that stays off for ``reset_timeout`` while the GPS
-  agrees is isolated; with no source fused for that long the estimate resets.
+  agrees is isolated, and so is a GPS whose innovations against Δ̄ stay biased (with
+  ``fault_detection``; the estimate then stays h_B + Δ̄); with no source fused for that long
+  the estimate resets.
 """
 
 from dataclasses import dataclass
@@ -53,14 +78,16 @@ class HajiyevParams(HealthParams):
                          positive=True)
     adaptive: bool = param(True, None, "Adaptive gain correction (eqs. 26-31); false: eqs. 15-19")
     gate_sigma: float = param(
-        4.0, "1", "Outlier gate on the jump of the residual since the last accepted one, in "
-        "standard deviations of that jump, sqrt(2 (R_B + R_GPS)), and on the jump of the baro "
-        "height since its last accepted sample (2 R_B and max_vz); 0: off. Not in the paper: "
-        "a gate on the residual itself would reject the drift the adaptation must follow",
-        min=0.0)
+        4.0, "1", "Outlier gate on the residual's innovation against its reference (the last "
+        "accepted residual, variance 2 (R_B + R_GPS); with fault_detection a Kalman estimate "
+        "of the residual's drifting mean), and on the jump of the baro height since its last "
+        "accepted sample (2 R_B and max_vz); 0: off. Not in the paper: a gate on the residual "
+        "itself would reject the drift the adaptation must follow", min=0.0)
     drift_psd: float = param(
         1.0, "m2/s", "Growth rate of the estimate's variance while no GPS sample arrives "
-        "(the baro error the held correction no longer tracks); not in the paper", min=0.0)
+        "(the baro error the held correction no longer tracks), and with fault_detection the "
+        "PSD of the random walk the residual reference follows (seed 002's drift of about "
+        "1 m/s at 1 s samples); not in the paper", min=0.0)
 
 
 class HajiyevAdaptiveEstimator(Estimator):
@@ -79,7 +106,9 @@ class HajiyevAdaptiveEstimator(Estimator):
         self.normalized_residual = 0.0
         self.correction = 0.0
         self.variance = self.params.R_baro
-        self._accepted_residual: float | None = None
+        self._reference: float | None = None
+        self._reference_variance = 0.0
+        self._reference_time = 0.0
         self._publish()
 
     def propagate(self, dt: float) -> None:
@@ -96,11 +125,8 @@ class HajiyevAdaptiveEstimator(Estimator):
             self.note("gps: sample before the first baro sample not fused (no h_B for eq. 18)")
             return
         residual = sample["gps_h"] - self.baro                                  # (18)
-        if self._accepted_residual is not None:
-            jump, jump_variance = residual - self._accepted_residual, 2 * (p.R_baro + p.R_gps)
-            if not self.gate("gps", jump, jump_variance, p.gate_sigma):
-                return
-        self._accepted_residual = residual
+        if not self._gate_residual(residual):
+            return
         factor = 1.0
         if p.adaptive and residual**2 >= p.R_gps + p.R_baro:                     # (28)
             factor = (residual**2 - p.R_gps) / p.R_baro                         # (30)
@@ -130,12 +156,50 @@ class HajiyevAdaptiveEstimator(Estimator):
         self.baro = h_baro
         self._publish()
 
+    def _gate_residual(self, residual: float) -> bool:
+        """Gate the GPS on the innovation of its residual Δ against the reference Δ̄, variance
+        P̄ + R_B + R_GPS, and update Δ̄ with an accepted Δ: True if the sample may be fused.
+        The first residual, also the first after a height reset, is accepted and becomes Δ̄
+        (P̄ = R_B + R_GPS).
+        Without ``fault_detection`` Δ̄ is the last accepted residual (the gate is on Δ's jump);
+        with it Δ̄ is the Kalman estimate of a random walk of PSD ``drift_psd`` measured by Δ
+        with variance R_B + R_GPS (its innovations are white with exactly that variance, as
+        the bias test assumes)."""
+        p = self.params
+        noise = p.R_baro + p.R_gps
+        reference, gain = residual, 1.0
+        if self._reference is not None:
+            prior = self._reference_variance
+            if p.fault_detection:
+                prior += p.drift_psd * (self.time - self._reference_time)
+            if not self.gate("gps", residual - self._reference, prior + noise, p.gate_sigma):
+                self._fall_back(prior)
+                return False
+            if p.fault_detection:
+                gain = prior / (prior + noise)
+                reference = self._reference + gain * (residual - self._reference)
+        self._reference, self._reference_variance = reference, gain * noise
+        self._reference_time = self.time
+        return True
+
+    def _fall_back(self, prior: float) -> None:
+        """A GPS sample rejected while the GPS is isolated (which needs ``fault_detection``):
+        the held correction of the last accepted sample may carry the fault, so the estimate
+        falls back to h_B plus the reference Δ̄ (the GPS-minus-baro offset learnt from the
+        accepted residuals), variance R_B + ``prior`` (P̄ now). A rejected outlier leaves the
+        held correction, as if the sample had not arrived."""
+        if not self.isolated("gps"):
+            return
+        self.correction = self._reference
+        self.variance = self.params.R_baro + prior
+        self._publish()
+
     def reset_height(self, source: str, innovation: float, variance: float) -> None:
-        """A baro reset takes the new baro level; a GPS reset drops the residual the jump
-        gate compares with, so that the next GPS sample is fused whatever its residual."""
+        """A baro reset takes the new baro level; any reset drops the residual reference, so
+        that the next GPS sample is fused whatever its residual and starts a new one."""
         if source == "baro":
             self.baro += innovation
-        self._accepted_residual = None
+        self._reference = None
         self._publish()
 
     def _publish(self) -> None:
