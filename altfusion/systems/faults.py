@@ -18,8 +18,6 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from altfusion.cosim.system import ComponentSpec, Connection, Metric, SystemSpec
-from altfusion.estimators.baseline import BaselineKFParams
-from altfusion.estimators.whang import WhangParams
 from altfusion.estimators.yang import YangParams
 from altfusion.replay.system import CATALOG_ESTIMATORS
 from altfusion.sensors.faults import PASSED_SIGNALS, STREAMS
@@ -195,8 +193,7 @@ GPS_VARIANCE = SEED_003_SENSORS["gnss"]["user_range_error"] ** 2
 TRUE_NOISE: dict[str, dict[str, Any]] = {
     "BaselineKF": {"R_baro": BARO_VARIANCE, "R_gps": GPS_VARIANCE},
     "HajiyevAdaptiveEstimator": {"R_baro": BARO_VARIANCE, "R_gps": GPS_VARIANCE},
-    "WhangGAEstimator": {"R_baro": BARO_VARIANCE, "R_gps": GPS_VARIANCE,
-                         "Q_b": BaselineKFParams().bias_psd * WhangParams().adm_period},
+    "WhangGAEstimator": {"R_baro": BARO_VARIANCE, "R_gps": GPS_VARIANCE},
     "BaoDriftEstimator": {"R_baro": BARO_VARIANCE, "R_gps": GPS_VARIANCE,
                           "user_range_error": SEED_003_SENSORS["gnss"]["user_range_error"],
                           "R_worst": 4.0 * GPS_VARIANCE},
@@ -224,12 +221,7 @@ range): the baro and the GNSS each get an offset state, and a GNSS off by 10 m w
 30 m noise (``all_fail``) is taken up by its offset instead of entering the height with its
 weight against the radar (0.54 m RMS after it against 1.00 m with the GNSS as reference).
 YangFusionKF gets its GPS-offset state for the same reason (``gps_bias_psd``, at the rate of
-its baro offset's walk: 0.46 m RMS after ``all_fail`` against 0.82 m without).
-WhangGAEstimator's baro-bias random walk Q_b (default: seed 000's weather, a lapse rate
-redrawn every 10 s, 400 m² per air-data step) is the flight's: its baro has no drift and its
-atmosphere no weather, so it gets BaselineKF's bias PSD (0.05 m²/s) per air-data step, 0.01 m².
-Under the paper's 2000 m²/s a bias moves 70 m (1σ) within the bias test's 2.5 s: a 100 m
-GNSS or 200 m baro step is absorbed within 0.5 s, no fault (106 m RMS after gnss_step)."""
+its baro offset's walk: 0.46 m RMS after ``all_fail`` against 0.82 m without)."""
 
 ESTIMATOR_RECORD = ("h_est", "vz_est", "h_std", "h_valid", "status", "n_height_resets")
 
