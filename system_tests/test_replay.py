@@ -73,68 +73,80 @@ def test_catalog_replay_systems_connect_exactly_the_inputs_each_fmu_declares(ssp
             assert connected == provided, (name, estimator)
 
 
-def test_on_the_real_flight_every_estimator_agrees_with_px4_ekf2_within_sensor_noise(ssp_files):
-    """Auterion flight, from 5 s after the first GPS fix (the offset-learning time, see
+LOG_NOISE = {"replay_auterion": (0.83, 0.59), "replay_px4_sitl": (0.70, 0.073)}
+"""Each log's sensor noise as measured by the agreement test below (σ_G, σ_B, m): the bounds
+come from the log itself, these figures pin what they are."""
+
+UNHELD = {"replay_auterion": ("XuSHAEKF",)}
+"""Estimators the agreement test does not hold to its bounds on a log, and why: on the
+Auterion flight XuSHAEKF integrates the accelerometer as its input, and that log's vertical
+acceleration is sampled at ~9 Hz with a vibration scatter of 8.7 m/s² (aliased rotor
+vibration), far from the MEMS accelerometer its model assumes. Through the log's 2.2 s
+air-data gap that input alone moves the height by metres, and the filter then rejects height
+samples (measured: std 2.8 m, max 25.8 m, 45 rejections). It must still run to the end with
+finite outputs (the tests above). On the SITL log (a simulated 250 Hz accelerometer) it is
+held like every other estimator."""
+
+
+def test_every_estimator_agrees_with_px4_ekf2_within_the_logs_sensor_noise(replayed):
+    """Each log, from 5 s after the first GPS fix (the offset-learning time, see
     altfusion.replay.compare.SETTLE_TIME) to the end, at each valid EKF2 sample: d = h_est -
-    ekf_h. The bounds come from this log's sensors, measured here:
+    ekf_h. The bounds come from the log's own sensors, measured here (:data:`LOG_NOISE`):
 
-    * σ_G, GPS height noise: the receiver's epv, at most 0.83 m;
-    * σ_B, baro noise: sample-to-sample scatter of baro_alt_meter, std(Δh)/√2 = 0.59 m (an
-      upper bound: Δh also holds the motion between samples).
+    * σ_G, GPS height noise: the receiver's epv, its largest value (Auterion 0.83 m, SITL
+      0.70 m);
+    * σ_B, baro noise: sample-to-sample scatter of baro_alt_meter, std(Δh)/√2 (Auterion
+      0.59 m, SITL 0.073 m; an upper bound: Δh also holds the motion between samples).
 
-    The estimators fuse GPS as their absolute reference (BaselineKF and Whang learn the 155 m
-    baro offset in their bias states, Hajiyev's adaptive gain goes to ~1); EKF2's height
-    reference is the baro, anchored to GPS when its origin was set. So:
+    The estimators fuse GPS as their absolute reference (BaselineKF and Whang learn the
+    Auterion baro's 155 m offset in their bias states, Hajiyev's adaptive gain goes to ~1);
+    EKF2's height reference is the baro, anchored to GPS when its origin was set. So:
 
     1. datum: mean(d) equals the log's own GPS-EKF2 datum difference mean(gps_h - ekf_h)
-       (-1.87 m) to within σ_G: the estimators follow GPS, and GPS errors over the 35 s are
-       correlated, so no better than 1 σ_G is claimed;
-    2. common datum (mean removed): std(d) <= √(σ_G² + σ_B²) = 1.02 m, the scatter of two
-       estimates each within sensor noise of the truth, one GPS-like, one baro-like;
-    3. no excursion beyond 4 √(σ_G² + σ_B²) = 4.1 m in the common datum;
-    4. no GPS height sample rejected: a clean flight (``gps_rejected``; YangFusionKF's gate on
-       the GPS vertical speed rejects one marginal sample, test ratio 1.13 at 41.8 s: its
-       speed variance is overconfident on this log).
+       (Auterion -1.87 m, SITL +0.11 m) to within σ_G: the estimators follow GPS, and GPS
+       errors over the tens of seconds compared are correlated, so no better than 1 σ_G is
+       claimed;
+    2. common datum (mean removed): std(d) <= √(σ_G² + σ_B²) (Auterion 1.02 m, SITL 0.70 m),
+       the scatter of two estimates each within sensor noise of the truth, one GPS-like, one
+       baro-like;
+    3. no excursion beyond 4 √(σ_G² + σ_B²) in the common datum;
+    4. no GPS height sample rejected: clean flights (``gps_rejected``; YangFusionKF's gate on
+       the GPS vertical speed rejects one marginal Auterion sample, test ratio 1.13 at 41.8 s:
+       its speed variance is overconfident on that log).
 
-    XuSHAEKF is held to none of these: it integrates the accelerometer as its input, and this
-    log's vertical acceleration is sampled at ~9 Hz with a vibration scatter of 8.7 m/s²
-    (aliased rotor vibration), far from the MEMS accelerometer its model assumes. Through the
-    log's 2.2 s air-data gap that input alone moves the height by metres, and the filter then
-    rejects height samples (measured: std 2.8 m, max 25.8 m, 45 rejections). It must still run
-    to the end with finite outputs (the tests above).
+    Issue 16 asks this of AltitudeEKF on both logs; every estimator but :data:`UNHELD` is held
+    to it.
     """
-    loaded = read_ssp(ssp_files["replay_auterion"])
-    with Simulation(loaded.spec, loaded.fmu_paths) as simulation:
-        results = simulation.run()
+    name, results = replayed
     start = settle_time(results)
     gps = new_sample_rows(results, "gps", "gps_fix")
     gps = gps[results.time[gps] >= start]
     sigma_g = float(np.max(results[f"{REPLAY}.gps_epv"][gps]))
     baro = new_sample_rows(results, "baro")
     sigma_b = float(np.std(np.diff(results[f"{REPLAY}.baro_h"][baro])) / math.sqrt(2))
-    assert sigma_g == pytest.approx(0.83, abs=0.01) and sigma_b == pytest.approx(0.59, abs=0.01)
+    assert (sigma_g, sigma_b) == pytest.approx(LOG_NOISE[name], abs=0.01)
     datum = float(np.mean(results[f"{REPLAY}.gps_h"][gps] - results[f"{REPLAY}.ekf_h"][gps]))
     bound = math.hypot(sigma_g, sigma_b)
     ekf = new_sample_rows(results, "ekf", "ekf_valid")
     ekf = ekf[results.time[ekf] >= start]
-    held = [name for name in ESTIMATORS if name != "XuSHAEKF"]
+    held = [e for e in ESTIMATORS if e not in UNHELD.get(name, ())]
+    assert "AltitudeEKF" in held
     for report in compare_all(results, held, start)[1:]:
         d = results[f"{report.name}.h_est"][ekf] - results[f"{REPLAY}.ekf_h"][ekf]
-        assert len(d) == report.vs_ekf.n > 250  # 34.6 s of EKF2 at ~9.6 Hz
+        assert len(d) == report.vs_ekf.n > 150  # Auterion 286 EKF2 samples, SITL 170
         assert abs(d.mean() - datum) <= sigma_g, report.name
         assert d.std() <= bound, report.name
         assert np.max(np.abs(d - d.mean())) <= 4 * bound, report.name
         assert results[f"{report.name}.gps_rejected"][-1] == 0, report.name
 
 
-def test_altitude_ekf_ground_height_scatters_no_more_than_ekf2s(ssp_files):
-    """Issue 16: on the Auterion flight AltitudeEKF's rangefinder-implied ground height
-    (h_est - laser_h at each valid lidar sample after the settle time) scatters no more than
-    EKF2's own (ekf_h - laser_h) + 0.1 m: its height is at least as smooth against the
-    lidar as the autopilot's."""
-    loaded = read_ssp(ssp_files["replay_auterion"])
-    with Simulation(loaded.spec, loaded.fmu_paths) as simulation:
-        results = simulation.run()
+@pytest.mark.parametrize("replayed", ["replay_auterion"], indirect=True)
+def test_altitude_ekf_ground_height_scatters_no_more_than_ekf2s(replayed):
+    """Issue 16: on the Auterion flight (the one log with a rangefinder) AltitudeEKF's
+    rangefinder-implied ground height (h_est - laser_h at each valid lidar sample after the
+    settle time) scatters no more than EKF2's own (ekf_h - laser_h) + 0.1 m: its height is at
+    least as smooth against the lidar as the autopilot's."""
+    _, results = replayed
     reports = {r.name: r for r in compare_all(results, ["AltitudeEKF"], settle_time(results))}
     ekf2, ours = reports.pop(next(n for n in reports if n != "AltitudeEKF")), reports[
         "AltitudeEKF"]
