@@ -39,45 +39,15 @@ ISOLATION_DEADLINE = 10.0
 AIDING_TIMEOUT = 5.0
 RECORD_INTERVAL = 0.1
 
-WHANG_BARO = ("WhangGAEstimator's barometer is ungated by design (its paper's weather steps "
-              "the baro height by up to ~100 m between samples, which its bias random walk "
-              "follows): a failed barometer is followed as a bias, never isolated. Tried: the "
-              "baro gated on its compensated height against the alpha-beta prediction, with "
-              "the flight's slow bias walk, passes these cells but rejects the baro of a "
-              "replayed PX4 log while the calibration of its unknown 155 m offset converges "
-              "(29 m off EKF2, 9 height resets): the alpha-beta state must first follow "
-              "calibration changes")
-WHANG_GNSS = ("WhangGAEstimator's GNSS calibrates the baro bias, whose random walk (its "
-              "paper's Q_b = 400 m² per air-data step) absorbs a step within a few samples: "
-              "at 10 Hz its steady-state gain is about 0.32, a 100 m step's innovations decay "
-              "as 0.68^k and their mean over the bias test's 2.5 s is about 12.5 m against a "
-              "standard deviation of 8.8 m (1.4, the test needs 5); the height follows the "
-              "GNSS (106 m RMS after gnss_step, 50 m after gnss_outage_return_off)")
-HAJIYEV_GNSS = ("HajiyevAdaptiveEstimator gates the GNSS on its residual's innovation against a "
-                "Kalman estimate of the residual's mean, a random walk of drift_psd 1 m²/s "
-                "(seed 002's baro drift of about 1 m/s): over the 100 s outage that reference's "
-                "variance grows to about 111 m², so each returning sample moves it by 8 % of "
-                "its innovation, and 50 m is at most 50/√(111 + 1300/25) = 3.9 standard "
-                "deviations over the bias test's 2.5 s, whose threshold is 4 (at the paper's "
-                "1 m/s the baro may drift 100 m in 100 s: the GPS-minus-baro residual cannot "
-                "tell this offset from drift); the GNSS is not isolated and the height follows "
-                "it (47.2 m RMS after the return, within 3x nominal 67 m)")
-REFERENCE_GNSS = ("the estimator takes the GNSS as its height reference (a baro bias state "
-                  "absorbs the rest): GNSS +10 m is a 10 m height error, beyond 3x the nominal "
-                  "RMS (PX4 with GNSS as reference does the same)")
-NO_THIRD_SENSOR = (REFERENCE_GNSS + ". Both errors lie within one sample's noise (GNSS 30 m: "
-                   "the bias test's 5-sigma threshold over 2.5 s is 30 m) and no third sensor "
-                   "reads the height (no radar; a laser only below 25 m): nothing can tell "
-                   "which source is off, so none is isolated and h_valid stays true "
-                   "(BaselineKF 9.3 m, XuSHAEKF 6.1 m RMS)")
+NO_THIRD_SENSOR = ("the estimator takes the GNSS as its height reference (a baro bias state "
+                   "absorbs the rest): GNSS +10 m is a 10 m height error, beyond 3x the "
+                   "nominal RMS (PX4 with GNSS as reference does the same). Both errors lie "
+                   "within one sample's noise (GNSS 30 m: the bias test's 5-sigma threshold "
+                   "over 2.5 s is 30 m) and no third sensor reads the height (no radar; a "
+                   "laser only below 25 m): nothing can tell which source is off, so none is "
+                   "isolated and h_valid stays true (BaselineKF 9.3 m, XuSHAEKF 6.1 m RMS)")
 
 KNOWN_FAILURES: dict[tuple[str, str, str], str] = {
-    ("isolation", "baro_step", "WhangGAEstimator"): WHANG_BARO,
-    ("isolation", "gnss_step", "WhangGAEstimator"): WHANG_GNSS,
-    ("isolation", "gnss_outage_return_off", "WhangGAEstimator"): WHANG_GNSS,
-    ("isolation", "gnss_outage_return_off", "HajiyevAdaptiveEstimator"): HAJIYEV_GNSS,
-    ("recovery", "gnss_step", "WhangGAEstimator"): WHANG_GNSS,
-    ("recovery", "gnss_outage_return_off", "WhangGAEstimator"): WHANG_GNSS,
     ("recovery", "all_fail", "BaselineKF"): NO_THIRD_SENSOR,
     ("recovery", "all_fail", "XuSHAEKF"): NO_THIRD_SENSOR,
 }
