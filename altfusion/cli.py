@@ -133,7 +133,8 @@ def command_reproduce(args: argparse.Namespace) -> int:
 
     options = ReproduceOptions(out=Path(args.out or f"results/reproduce_{args.name}"),
                                runs=args.runs, workers=args.workers, scheduler=args.scheduler,
-                               master_seed=args.seed, resume=args.resume, models=args.models)
+                               master_seed=args.seed, resume=args.resume, models=args.models,
+                               paper_algorithm=args.paper_algorithm)
     return reproduction(args.name).reproduce(options)
 
 
@@ -187,6 +188,9 @@ def build_parser() -> argparse.ArgumentParser:
     reproduce.add_argument("--seed", type=int, default=0, help="master seed")
     reproduce.add_argument("--resume", action="store_true")
     reproduce.add_argument("--models", type=Path, default=Path("models"))
+    reproduce.add_argument("--paper-algorithm", action="store_true",
+                           help="every estimator with fault_detection false (the papers' "
+                                "algorithms, without resets, isolation and bias states)")
     reproduce.add_argument("--out", default=None,
                            help="output folder (default: results/reproduce_NAME)")
     reproduce.set_defaults(handler=command_reproduce)

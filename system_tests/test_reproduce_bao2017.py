@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from algorithms import DEFAULT, either_way
 from scipy import stats
 
 from altfusion.estimators.bao import gps_height_std
@@ -37,11 +38,11 @@ RUNS = 5
 """Five runs: the fewest in which winning every run is significant at 95 % (2⁻⁵ = 3 %)."""
 
 
-@pytest.fixture(scope="module")
-def bao(reproduce_cli, tmp_path_factory):
+@pytest.fixture(scope="module", params=DEFAULT)
+def bao(reproduce_cli, tmp_path_factory, request):
     """``altfusion reproduce bao2017 -n RUNS``: its folder, standard output and analysis."""
     out = tmp_path_factory.mktemp("bao2017")
-    return out, reproduce_cli("bao2017", RUNS, out), bao2017.analyse(out)
+    return out, reproduce_cli("bao2017", RUNS, out, request.param), bao2017.analyse(out)
 
 
 def phase_rows(time: np.ndarray, index: int) -> np.ndarray:
@@ -70,6 +71,7 @@ def test_bao_reproduction_writes_fig8_and_the_table(bao):
     assert (out / "bao2017.md").read_text() in stdout
 
 
+@either_way("bao")
 def test_adaptive_r_is_the_gps_variance_of_each_quality_phase(bao):
     """Eq. (14) with η = min(1, σ_G²/C): inside each phase of the schedule R_k is exactly the
     σ_G² = (UERE·VDOP)²·max(1, N_ref/N) of the phase (all below C = 225 m²)."""
@@ -106,6 +108,7 @@ def test_gps_error_follows_the_quality_schedule(bao):
         assert low < np.mean(errors**2) / sigma**2 < high, index
 
 
+@either_way("bao")
 def test_the_best_constant_r_lies_inside_the_grid(bao):
     """The grid brackets the best constant R: the smallest RMS over the test is not at an
     end of the grid (100 runs: 25 m², with 16 and 36 m² within 1.5 %)."""
@@ -113,6 +116,7 @@ def test_the_best_constant_r_lies_inside_the_grid(bao):
     assert bao2017.CONSTANT_R[0] < a.best < bao2017.CONSTANT_R[-1]
 
 
+@either_way("bao")
 @pytest.mark.parametrize("window", list(bao2017.WINDOWS))
 def test_adaptive_r_beats_the_best_constant_r_in_every_run(bao, window):
     """Fig. 8: the proposed method has the smaller error than the normal Kalman filter, over
@@ -131,6 +135,7 @@ def test_adaptive_r_beats_the_best_constant_r_in_every_run(bao, window):
     assert interval.high < 0.0
 
 
+@either_way("bao")
 @pytest.mark.parametrize("R", bao2017.CONSTANT_R)
 def test_adaptive_r_beats_every_constant_r_over_the_test(bao, R):
     """NOTES.md (seed 001): adaptive R beats every constant R on a static test whose GPS

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from algorithms import DEFAULT, either_way
 from scipy import stats
 
 from altfusion.montecarlo.storage import read_run
@@ -37,10 +38,11 @@ number of runs) at half the CI time of ten."""
 # ------------------------------------------------------------------------------ seed 000
 
 
-@pytest.fixture(scope="module")
-def whang(reproduce_cli, tmp_path_factory):
+@pytest.fixture(scope="module", params=DEFAULT)
+def whang(reproduce_cli, tmp_path_factory, request):
     out = tmp_path_factory.mktemp("whang2008")
-    return out, reproduce_cli("whang2008", WHANG_RUNS, out), whang2008.analyse(out)
+    return (out, reproduce_cli("whang2008", WHANG_RUNS, out, request.param),
+            whang2008.analyse(out))
 
 
 def test_whang_reproduction_writes_fig3_and_the_table(whang):
@@ -71,6 +73,7 @@ def test_whang_reproduction_resumes_without_rerunning_and_refuses_to_overwrite(w
     assert "already holds a campaign: --resume completes it" in refused.stderr
 
 
+@either_way("whang")
 def test_whang_final_height_stays_under_the_gps_error_level(whang):
     """Seed 000 Section 3: the estimator "can suppress the height estimation errors under the
     GPS error level" (70 m). The 95 % interval of the final height's RMS over the flight
@@ -85,6 +88,7 @@ def test_whang_final_height_stays_under_the_gps_error_level(whang):
     assert short.max() < whang2008.GPS_SIGMA
 
 
+@either_way("whang")
 def test_whang_filtering_improves_on_the_compensated_height_in_every_run(whang):
     """Fig. 3: the alpha-beta filter (eqs. 33-34) lowers the error of the compensated height
     h^c (eq. 32). Run by run over the flight (50 runs: 3.0 ± 0.6 m lower, at least 1.8 m)."""
@@ -99,6 +103,7 @@ def test_whang_filtering_improves_on_the_compensated_height_in_every_run(whang):
     assert np.all(run_rms("estimator.h_est") < run_rms("estimator.h_comp"))
 
 
+@either_way("whang")
 def test_whang_final_height_is_well_below_the_drifted_baro_in_the_cruise(whang):
     """At 4000 m a lapse rate 0.003 K/m off the calibration's makes the barometer err by
     δΓ·h²/(2 T0) = 83 m (1σ) to first order, 86 m exactly; the final height's RMS there
@@ -132,10 +137,11 @@ def test_whang_campaign_run_0_is_the_reference(whang):
 # ------------------------------------------------------------------------------ seed 002
 
 
-@pytest.fixture(scope="module")
-def hajiyev_runs(reproduce_cli, tmp_path_factory):
+@pytest.fixture(scope="module", params=DEFAULT)
+def hajiyev_runs(reproduce_cli, tmp_path_factory, request):
     out = tmp_path_factory.mktemp("hajiyev")
-    return out, reproduce_cli("hajiyev", HAJIYEV_RUNS, out), hajiyev.analyse(out)
+    return (out, reproduce_cli("hajiyev", HAJIYEV_RUNS, out, request.param),
+            hajiyev.analyse(out))
 
 
 def test_hajiyev_reproduction_writes_the_figures_and_the_table(hajiyev_runs):
@@ -149,6 +155,7 @@ def test_hajiyev_reproduction_writes_the_figures_and_the_table(hajiyev_runs):
         in stdout
 
 
+@either_way("hajiyev_runs")
 def test_hajiyev_constant_case_fuses_to_the_theoretical_variance(hajiyev_runs):
     """Eq. (13): the fused error variance is R_B·R_GPS/(R_B + R_GPS) = 54.756 m². Its errors
     are white and Gaussian, so the mean of the runs' sample variances over k = 1..1560 is
@@ -165,6 +172,7 @@ def test_hajiyev_constant_case_fuses_to_the_theoretical_variance(hajiyev_runs):
     assert abs(hajiyev.FUSED_VARIANCE - 54.756) < 5e-4
 
 
+@either_way("hajiyev_runs")
 def test_hajiyev_baseline_kf_beats_the_static_fusion_in_the_constant_case(hajiyev_runs):
     """Eqs. (15)-(19) fuse each pair of samples alone; BaselineKF fuses the same samples with
     a motion model that fits the smooth descent (its white acceleration, 0.5 m²/s³, covers
@@ -176,6 +184,7 @@ def test_hajiyev_baseline_kf_beats_the_static_fusion_in_the_constant_case(hajiye
     assert baseline.interval.high < hajiyev.FUSED_VARIANCE
 
 
+@either_way("hajiyev_runs")
 def test_hajiyev_adaptive_fusion_stays_at_the_gps_level_in_the_drift_case(hajiyev_runs):
     """Table 1: the adaptive fusion's error variance over k = 1..n stays at 160-165 m² while
     p0 and T0 drift. Once the drift exceeds the noise (k ≈ 60), S(k) ≫ 1, K → 1 and the
@@ -190,6 +199,7 @@ def test_hajiyev_adaptive_fusion_stays_at_the_gps_level_in_the_drift_case(hajiye
         assert interval.low < variance < interval.high, n
 
 
+@either_way("hajiyev_runs")
 def test_hajiyev_non_adaptive_fusion_keeps_two_thirds_of_the_drift(hajiyev_runs):
     """The drifted atmosphere makes the barometer read 1211 m low at k = 1560 (computed here
     from the drift, the calibration and the altitude); the non-adaptive fusion keeps
@@ -212,6 +222,7 @@ def test_hajiyev_non_adaptive_fusion_keeps_two_thirds_of_the_drift(hajiyev_runs)
     assert tail == pytest.approx(R_GPS**0.5, rel=0.15)
 
 
+@either_way("hajiyev_runs")
 def test_hajiyev_adaptive_factor_follows_the_residual(hajiyev_runs):
     """Eq. (30): S = (Δ² - R_GPS)/R_B with Δ ≈ the baro error, -1211 m at k = 1560:
     S ≈ 1.81e4; the 13 m and 9 m noises on Δ scatter it by ±2·13·√(1 + 81/169)/1211 ≈ ±2.6 %

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from algorithms import DEFAULT, either_way
 
 from altfusion.montecarlo.storage import read_run
 from altfusion.reproduce import xu2016
@@ -25,10 +26,10 @@ RUNS = 2
 LASER_SIGMA = SENSORS["laser"]["noise_std"]
 
 
-@pytest.fixture(scope="module")
-def xu(reproduce_cli, tmp_path_factory):
+@pytest.fixture(scope="module", params=DEFAULT)
+def xu(reproduce_cli, tmp_path_factory, request):
     out = tmp_path_factory.mktemp("xu2016")
-    return out, reproduce_cli("xu2016", RUNS, out), xu2016.analyse(out)
+    return out, reproduce_cli("xu2016", RUNS, out, request.param), xu2016.analyse(out)
 
 
 def test_xu_reproduction_writes_the_figures_and_the_tables(xu):
@@ -41,6 +42,7 @@ def test_xu_reproduction_writes_the_figures_and_the_tables(xu):
     assert "| multipoint hover, wind grade 3 | altitude ≥ 25 m | XuSHAEKF | ≤ 1.5 |" in stdout
 
 
+@either_way("xu")
 def test_xu_estimate_never_diverges(xu):
     """No divergence (strong tracking, eqs. 23-24): in every scenario and run XuSHAEKF's
     estimate is finite at every output time and its RMS error over the run's last 20 s is
@@ -54,6 +56,7 @@ def test_xu_estimate_never_diverges(xu):
         assert not scenario.diverged("XuSHAEKF"), name
 
 
+@either_way("xu")
 @pytest.mark.parametrize("name", list(xu2016.SCENARIOS))
 def test_xu_error_bounds_of_section_3_2_hold(xu, name):
     """Section 3.2: |error| ≤ 1 m below 25 m and ≤ 1.2 m above without wind, 1.1 m and 1.5 m
@@ -70,6 +73,7 @@ def test_xu_error_bounds_of_section_3_2_hold(xu, name):
         assert xu2016.within(scenario.percentile("XuSHAEKF", band), bound), band
 
 
+@either_way("xu")
 def test_xu_gps_failure_does_not_degrade_the_estimate(xu):
     """Section 3.1, Fig. 10: at 15 m the improved filter keeps its accuracy when the GPS
     fails at 60 s. The laser (σ 5 mm at 100 Hz) carries the estimate, so in every run the RMS
@@ -84,6 +88,7 @@ def test_xu_gps_failure_does_not_degrade_the_estimate(xu):
     assert not xu2016.failure_effect(hover, "XuSHAEKF").degraded
 
 
+@either_way("xu")
 def test_xu_switches_between_laser_and_barometer_at_25_m(xu):
     """Eq. (14): the laser is the height source below 25 m, the barometer above. In every run
     of the multipoint flights, at every output time of the hovers at 10 m and 22 m (from 20 s

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from algorithms import DEFAULT, either_way
 
 from altfusion.montecarlo.statistics import rms_chi2_bounds
 from altfusion.montecarlo.storage import read_run
@@ -21,11 +22,11 @@ MODELS = ROOT / "models"
 RUNS = 4
 
 
-@pytest.fixture(scope="module")
-def yang(reproduce_cli, tmp_path_factory):
+@pytest.fixture(scope="module", params=DEFAULT)
+def yang(reproduce_cli, tmp_path_factory, request):
     """``altfusion reproduce yang2020 -n RUNS`` in a subprocess: (out, stdout, analysis)."""
     out = tmp_path_factory.mktemp("yang2020")
-    return out, reproduce_cli("yang2020", RUNS, out), yang2020.analyse(out)
+    return out, reproduce_cli("yang2020", RUNS, out, request.param), yang2020.analyse(out)
 
 
 def test_yang_reproduction_writes_fig2_and_the_tables(yang):
@@ -38,6 +39,7 @@ def test_yang_reproduction_writes_fig2_and_the_tables(yang):
     assert (out / "yang2020.md").read_text() in stdout
 
 
+@either_way("yang")
 def test_yang_weighted_fusion_sigma_matches_its_theory(yang):
     """Section 3.2: 1/σ_Y² = Σ 1/σ_i² gives σ_Y = 8.571 m for 30 / 20 / 10 m. YangFusionKF
     reports exactly that at every fusion instant (all three sensors live). Its errors there
@@ -58,6 +60,7 @@ def test_yang_weighted_fusion_sigma_matches_its_theory(yang):
         assert low < sigma < high, (way, low, high)
 
 
+@either_way("yang")
 def test_yang_kalman_filter_beats_every_sensor_and_the_fusion_in_every_run(yang):
     """Section 4.2's "499 / 491 / 388 times better than GPS / baro / radio altimeter", read as
     counts of runs (NOTES.md): here the filter's σ of eq. (15) is below every sensor's and
@@ -71,6 +74,7 @@ def test_yang_kalman_filter_beats_every_sensor_and_the_fusion_in_every_run(yang)
     assert a.rms("YangFusionKF").interval.high < yang2020.FUSED_SIGMA / 4
 
 
+@either_way("yang")
 def test_yang_baseline_kf_runs_in_the_scenario_and_loses_to_the_paper_s_filter(yang):
     """BaselineKF (baro + GPS, no radio altimeter, no IMU) flies the same loop on the same
     sensor noise (paired runs): YangFusionKF's σ of eq. (15) is below BaselineKF's in every

@@ -27,6 +27,9 @@ class ReproduceOptions:
     resume: bool = False
     models: Path = Path("models")
     """Folder holding the built FMUs and SSP files."""
+    paper_algorithm: bool = False
+    """Every estimator with ``fault_detection`` false: the papers' algorithms, without the
+    shared health machinery's resets, isolation and bias states."""
 
 
 def reproduction(name: str):

@@ -39,6 +39,7 @@ from altfusion.montecarlo.source import CampaignError, SystemSource
 from altfusion.montecarlo.statistics import Interval, rms_chi2_bounds, root_interval
 from altfusion.montecarlo.storage import finished_runs, has_manifest, read_manifest, read_run
 from altfusion.montecarlo.swap import SwapError, find_fmu
+from altfusion.replay.system import CATALOG_ESTIMATORS
 from altfusion.reproduce import ReproduceOptions, reproduction
 
 CONFIDENCE = 0.95
@@ -77,6 +78,17 @@ def campaign_source(campaign: Campaign, models: Path) -> SystemSource:
     return SystemSource.from_path(ssp, swap)
 
 
+def paper_algorithm(source: SystemSource) -> dict[str, bool]:
+    """Parameter overrides that turn ``fault_detection`` off in every estimator component
+    of the campaign's system (its own estimator FMUs and a swapped-in one)."""
+    spec = read_ssp(source.ssp).spec
+    fmus = {c.name: c.fmu for c in spec.components}
+    if source.swap is not None:
+        fmus[source.swap.component] = source.swap.fmu
+    return {f"{name}.fault_detection": False for name, fmu in fmus.items()
+            if fmu in CATALOG_ESTIMATORS}
+
+
 def run_campaigns(campaigns: tuple[Campaign, ...], options: ReproduceOptions,
                   default_runs: int) -> int:
     """Run every campaign, or with ``options.resume`` complete those already started; the
@@ -89,9 +101,11 @@ def run_campaigns(campaigns: tuple[Campaign, ...], options: ReproduceOptions,
         runs = options.runs if options.runs is not None or resume else default_runs
         print(f"{campaign.label} ({campaign.system}):", file=sys.stderr, flush=True)
         try:
+            source = campaign_source(campaign, options.models)
+            parameters = {**(paper_algorithm(source) if options.paper_algorithm else {}),
+                          **campaign.parameters}
             outcome = run_campaign(
-                campaign_source(campaign, options.models), out,
-                CampaignSettings(runs, options.master_seed, None, dict(campaign.parameters)),
+                source, out, CampaignSettings(runs, options.master_seed, None, parameters),
                 execution, resume=resume)
         except (CampaignError, SwapError) as error:
             print(f"error: {error}", file=sys.stderr)
