@@ -133,12 +133,22 @@ def gone(pid: int, timeout: float = 10.0) -> bool:
     return False
 
 
+def default_sigint() -> None:
+    """In the child before it starts: Ctrl-C's default disposition. A shell without job
+    control starts a background command with SIGINT ignored (``pytest ... &`` in a script),
+    its children inherit that, and Python then installs no KeyboardInterrupt handler: the
+    campaign would not see the interrupt this test sends, as it should not see one sent to a
+    background job."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def test_an_interrupted_campaign_keeps_its_runs_and_resumes_to_the_same_result(
         gusty_ssp, reference, tmp_path):
     out = tmp_path / "interrupted"
     process = subprocess.Popen(cli("mc", str(gusty_ssp), "-n", str(RUNS), "--workers", "1",
                                    "--out", str(out)),
-                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               preexec_fn=default_sigint)
     wait_for_runs(out, 2, process)
     process.send_signal(signal.SIGINT)
     _, stderr = process.communicate(timeout=60)
