@@ -2,7 +2,10 @@
 
 import pytest
 
-ALGORITHMS = ("fault_detection", "paper_algorithm")
+PAPER_ALGORITHM = "paper_algorithm"
+"""Every estimator with ``fault_detection`` false (``altfusion reproduce --paper-algorithm``)."""
+
+ALGORITHMS = ("fault_detection", PAPER_ALGORITHM)
 """The two ways every reproduction runs: its estimators as they ship (``fault_detection``
 true, the shared health machinery's resets, isolation and bias states) and as their papers
 give them (``altfusion reproduce --paper-algorithm``). Issue 15: every reproduction stays

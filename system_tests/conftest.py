@@ -7,7 +7,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
-from algorithms import ALGORITHMS
+from algorithms import ALGORITHMS, PAPER_ALGORITHM
 
 ROOT = Path(__file__).resolve().parents[1]
 MODELS = ROOT / "models"
@@ -32,16 +32,17 @@ def ssp_files(fmus) -> dict[str, Path]:
 
 REPRODUCE_WORKERS = 2
 
+
 @pytest.fixture(scope="session")
 def reproduce_cli(fmus) -> Callable[[str, int, Path, str], str]:
     """``altfusion reproduce NAME -n RUNS --out OUT`` in a subprocess on the built models, two
-    workers, with ``--paper-algorithm`` when the algorithm is ``paper_algorithm``; returns its
+    workers, with ``--paper-algorithm`` for :data:`PAPER_ALGORITHM`; returns its
     standard output (fails the test with its error output otherwise)."""
     def run(name: str, runs: int, out: Path, algorithm: str = ALGORITHMS[0]) -> str:
         completed = subprocess.run(
             [sys.executable, "-m", "altfusion.cli", "reproduce", name, "-n", str(runs),
              "--workers", str(REPRODUCE_WORKERS), "--models", str(MODELS), "--out", str(out),
-             *(["--paper-algorithm"] if algorithm == "paper_algorithm" else [])],
+             *(["--paper-algorithm"] if algorithm == PAPER_ALGORITHM else [])],
             capture_output=True, text=True, timeout=600, cwd=ROOT)
         assert completed.returncode == 0, completed.stderr[-3000:]
         return completed.stdout

@@ -14,6 +14,7 @@ from altfusion.estimators.whang import WhangGAEstimator, WhangParams
 from altfusion.physics.atmosphere import Atmosphere, AtmosphereParams
 from altfusion.physics.barometric import height_from_pressure, pressure_at
 from altfusion.physics.profiles import make_profile
+from altfusion.systems.faults import TRUE_NOISE
 
 ESTIMATORS = (BaselineKF, HajiyevAdaptiveEstimator, WhangGAEstimator)
 
@@ -236,7 +237,7 @@ def whang_hover(baro_step: float, fault_detection: bool = True,
     (``systems.faults.TRUE_NOISE``), the baro off by ``baro_step`` from 20 s. Returns the
     times, height errors and ``status``."""
     rng = np.random.default_rng(seed)
-    params = WhangParams(R_baro=400.0, R_gps=900.0, Q_b=0.01, fault_detection=fault_detection)
+    params = WhangParams(**TRUE_NOISE["WhangGAEstimator"], fault_detection=fault_detection)
     feeder = StreamFeeder(WhangGAEstimator(params, step_size=0.05))
     times, errors, status = [], [], []
     for n in range(1800):

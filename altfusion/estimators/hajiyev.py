@@ -43,7 +43,9 @@ Deviations from the paper:
   baro may have drifted 10 m in the model, 100 m at the paper's 1 m/s), the first returning
   samples take 8 % of their innovation each, and 50 m is at most 50/√(P̄ + R/25) = 3.9
   standard deviations over the bias test's 2.5 s even against a frozen reference: not a
-  fault that the residual between baro and GPS can tell from drift;
+  fault that the residual between baro and GPS can tell from drift at seed 002's rate. Told
+  a flight's slower drift (the fault flight's 0.05 m²/s, ``systems.faults.BARO_BIAS_PSD``),
+  P̄ grows by 5 m² and the returning GNSS is isolated 3 s after it is back;
 * a GPS sample rejected while the GPS is isolated (with ``fault_detection``) sets the
   estimate to h_B + Δ̄, variance R_B + P̄: the held correction K·Δ of the last accepted
   sample (eq. 15) may carry the fault (the adaptive gain of eqs. 27, 30 is about 0.9 for a

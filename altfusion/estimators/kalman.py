@@ -186,7 +186,14 @@ def shift_state(x, P, index: int, innovation: float, variance: float) -> None:
     ``innovation``, its variance ``variance``, uncorrelated with the other states (a reset
     onto a measurement, :func:`reset_state` for the immutable tuples)."""
     x[index] += innovation
-    for j in range(len(x)):
+    decorrelate(P, index, variance)
+
+
+def decorrelate(P, index: int, variance: float) -> None:
+    """In place: state ``index`` of covariance P given variance ``variance`` and no
+    correlation with the other states (:func:`shift_state`'s covariance part, for a second
+    covariance of the same state)."""
+    for j in range(len(P)):
         P[index][j] = P[j][index] = 0.0
     P[index][index] = variance
 

@@ -65,7 +65,7 @@ import numpy as np
 
 from altfusion.constants import ISA_LAPSE_RATE, ISA_T0
 from altfusion.estimators.base import BARO_T, GPS, Estimator, HealthParams
-from altfusion.estimators.kalman import joseph, predict, update
+from altfusion.estimators.kalman import decorrelate, joseph, predict, shift_state, update
 from altfusion.params import param
 
 ONE = np.array([[1.0]])
@@ -186,12 +186,9 @@ class WhangGAEstimator(Estimator):
         """The GPS height fused into the alpha-beta filter (eq. 34 with R^GPS) while the baro
         is rejected (``fault_detection`` only): z = h^B - h^GPS has no valid h^B then."""
         R = self.params.R_gps
-        if not self.gate("gps", h_gps - self.h_prior, self.P_error[0, 0] + R,
-                         self.params.gate_sigma):
-            return
-        result = update(self.x, self.P, h_gps, H_ALPHA_BETA, R)
-        self.x, self.P = result.x, result.P
-        self.P_error = joseph(self.P_error, result.K, H_ALPHA_BETA, R)
+        if self.gate("gps", h_gps - self.h_prior, self.P_error[0, 0] + R,
+                     self.params.gate_sigma):
+            self._alpha_beta_update(h_gps, R, R)
 
     def _lambda_update(self, temperature: float) -> None:
         """Eqs. (6), (7), (19)-(22): scale factor from the ADM temperature."""
@@ -243,12 +240,18 @@ class WhangGAEstimator(Estimator):
                 self.P_error = np.diag([R_h, self.P[1, 1]])
             self.started = True
             return
-        result = update(self.x, self.P, self.h_comp, H_ALPHA_BETA, R_h)
+        white = self.params.R_baro / (1.0 + self.a) ** 2
+        shared = self._samples_per_calibration() * (R_h - white)
+        self._alpha_beta_update(self.h_comp, R_h, white + shared)
+
+    def _alpha_beta_update(self, z: float, R: float, R_error: float) -> None:
+        """Eq. (34): the alpha-beta filter updated by the height z of variance R; with
+        ``fault_detection`` also the error covariance of ``h_std`` under the variance
+        ``R_error`` that z's error truly has for this gain (Joseph form)."""
+        result = update(self.x, self.P, z, H_ALPHA_BETA, R)
         self.x, self.P = result.x, result.P
         if self.params.fault_detection:
-            white = self.params.R_baro / (1.0 + self.a) ** 2
-            shared = self._samples_per_calibration() * (R_h - white)
-            self.P_error = joseph(self.P_error, result.K, H_ALPHA_BETA, white + shared)
+            self.P_error = joseph(self.P_error, result.K, H_ALPHA_BETA, R_error)
 
     def _interval(self, name: str, stamp: float) -> None:
         """Record the interval between the last two samples of ``name`` (positive only)."""
@@ -269,8 +272,8 @@ class WhangGAEstimator(Estimator):
         if source == "gps" and not self._baro_rejected:
             self.b, self.P_b = self.b + innovation, variance
             return
-        self.x = self.x + np.array([innovation, 0.0])
-        self.P, self.P_error = (np.diag([variance, P[1, 1]]) for P in (self.P, self.P_error))
+        shift_state(self.x, self.P, 0, innovation, variance)
+        decorrelate(self.P_error, 0, variance)
 
     def reset_offset(self, source: str, innovation: float, variance: float) -> bool:
         """The baro's offset is b̂ (an isolated baro re-admitted, estimators/base.py): moved
