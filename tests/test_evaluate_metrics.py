@@ -7,8 +7,11 @@ import numpy as np
 import pytest
 
 from altfusion.estimators.altitude_ekf import AltitudeEKF
+from altfusion.estimators.bao import BaoDriftEstimator
 from altfusion.estimators.base import SourceBit, Status, source_bit
 from altfusion.estimators.baseline import BaselineKF
+from altfusion.estimators.hajiyev import HajiyevAdaptiveEstimator
+from altfusion.estimators.whang import WhangGAEstimator
 from altfusion.estimators.xu import XuSHAEKF
 from altfusion.estimators.yang import YangFusionKF
 from altfusion.montecarlo.evaluate_metrics import (
@@ -184,10 +187,21 @@ def test_every_paper_scenario_states_error_models_an_estimator_can_take():
 
 
 def test_stated_error_models_go_to_every_estimator_with_that_parameter():
-    errors = {"baro_bias_psd": 0.0, "terrain_h": 0.0, "P0_offset": 0.01, "baro_noise": 0.7}
+    errors = {"baro_bias_psd": 0.5, "terrain_h": 0.0, "P0_offset": 0.01, "baro_noise": 0.7}
     assert error_parameters(estimator(AltitudeEKF), errors) == {
-        "baro_bias_psd": 0.0, "terrain_h": 0.0, "P0_offset": 0.01}
-    assert error_parameters(estimator(XuSHAEKF), errors) == {"baro_bias_psd": 0.0,
+        "baro_bias_psd": 0.5, "terrain_h": 0.0, "P0_offset": 0.01}
+    assert error_parameters(estimator(XuSHAEKF), errors) == {"baro_bias_psd": 0.5,
                                                              "terrain_h": 0.0}
-    assert error_parameters(estimator(BaselineKF), errors) == {}
     assert "baro_noise" in NOISE_NAMES           # a restated noise goes as the noises go
+
+
+def test_a_stated_error_model_reaches_the_parameter_of_the_same_quantity_under_another_name():
+    """The random walk of baro_h's error is BaselineKF's bias_psd and Hajiyev's drift_psd
+    (m²/s each); Bao and Whang, which compute their own height from the pressure, keep
+    their walks (docs/montecarlo.md)."""
+    errors = {"baro_bias_psd": 0.5, "baro_scale_psd": 1e-6, "terrain_h": 0.0}
+    assert error_parameters(estimator(BaselineKF), errors) == {"bias_psd": 0.5}
+    assert error_parameters(estimator(HajiyevAdaptiveEstimator), errors) == {"drift_psd": 0.5}
+    assert error_parameters(estimator(BaoDriftEstimator), errors) == {}
+    assert error_parameters(estimator(WhangGAEstimator), errors) == {}
+    assert error_parameters(estimator(BaselineKF), {"terrain_h": 0.0}) == {}

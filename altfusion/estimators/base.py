@@ -46,6 +46,7 @@ with :meth:`Estimator.held_input`, which holds the last finite value over non-fi
 import math
 from abc import abstractmethod
 from collections import deque
+from collections.abc import Mapping
 from dataclasses import dataclass
 from enum import IntEnum, IntFlag
 from functools import cached_property
@@ -270,6 +271,10 @@ class Estimator(Component):
     streams: ClassVar[tuple[Stream, ...]]
     extra_inputs: ClassVar[tuple[str, ...]] = ()
     """Real inputs outside any stream (no count), read with :meth:`held_input`."""
+    stated_aliases: ClassVar[dict[str, str]] = {}
+    """A sensor error model's stated name (``baro_bias_psd``... of
+    :mod:`altfusion.systems.error_models`) -> this estimator's parameter of the same quantity
+    and unit under another name (BaselineKF's ``bias_psd``)."""
 
     def __init__(self, params=None, **kwargs):
         for name in self.extra_inputs:
@@ -290,6 +295,19 @@ class Estimator(Component):
     def sources(cls) -> tuple[str, ...]:
         """The sources of this estimator's streams (test ratio and rejection count each)."""
         return stream_sources(cls.streams)
+
+    @classmethod
+    def stated_parameters(cls, stated: Mapping[str, float]) -> dict[str, float]:
+        """The parameter values that tell this estimator the sensor error models ``stated``
+        (stated name -> value in that name's unit): the parameter of the stated name, else
+        its alias (:attr:`stated_aliases`); a model it has no parameter for is left out."""
+        fields = cls.Params.__dataclass_fields__
+        values = {}
+        for name, value in stated.items():
+            target = name if name in fields else cls.stated_aliases.get(name)
+            if target is not None:
+                values[target] = value
+        return values
 
     def reset(self) -> None:
         self._last_count = {s.prefix: getattr(self, s.count) for s in self.streams}

@@ -54,6 +54,7 @@ class BaselineKF(Estimator):
 
     Params = BaselineKFParams
     streams = (BARO, GPS)
+    stated_aliases = {"baro_bias_psd": "bias_psd"}
 
     def configure(self, clock) -> None:
         """F and Q of one step of the estimator (white acceleration on h and v, a random walk

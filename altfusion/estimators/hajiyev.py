@@ -97,6 +97,7 @@ class HajiyevAdaptiveEstimator(Estimator):
 
     Params = HajiyevParams
     streams = (BARO, GPS)
+    stated_aliases = {"baro_bias_psd": "drift_psd"}
 
     def initialize_filter(self) -> None:
         self.baro = float(self.baro_h)

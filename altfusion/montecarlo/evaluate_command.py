@@ -16,7 +16,8 @@ suite ([faults](faults.md)) as Monte Carlo ([Monte Carlo campaigns](montecarlo.m
 run all applicable estimators read the same sensor outputs side by side, each told its
 sensors' true noise and, in a paper scenario, the sensor error models the paper system states
 (a calibrated barometer, its drift, flat terrain, an accelerometer's turn-on bias; listed with
-each scenario below), through every parameter of those names it has. The paper's own
+each scenario below), through every parameter it has of those names or of the same quantity
+under its own name (BaselineKF's `bias_psd` is a `baro_bias_psd`). The paper's own
 estimator keeps its paper's parameters (and, in yang2020 and xu2016, flies the aircraft); the
 others run their defaults for everything else.
 An estimator lacking what a scenario needs is n/a, never run on defaults. How the metrics are

@@ -27,9 +27,10 @@ names ``baro_noise``... of ``docs/signals.md``) through the parameters it has: t
 name itself, else the variance ``R_<source>`` (σ²) or ``<source>_noise_std`` (σ). In a paper
 scenario it also gets the sensors' error models beyond white noise that the paper system
 states (:data:`altfusion.systems.error_models.SENSOR_ERRORS`: a calibrated barometer, its
-drift, flat terrain, an accelerometer's turn-on bias...) through every parameter of the
-stated name it has (:func:`error_parameters`). The paper's own estimator keeps its paper's
-parameters.
+drift, flat terrain, an accelerometer's turn-on bias...) through every parameter it has of
+the stated name or of the same quantity under its own name (:func:`error_parameters`: the
+random walk of the baro height's error is BaselineKF's ``bias_psd``). The paper's own
+estimator keeps its paper's parameters.
 """
 
 import importlib
@@ -204,10 +205,13 @@ def noise_parameters(estimator: EstimatorInfo, noise: dict[str, float]) -> dict[
 
 
 def error_parameters(estimator: EstimatorInfo, errors: dict[str, float]) -> dict[str, float]:
-    """The stated sensor error models ``errors`` (parameter name -> value) that the estimator
-    has parameters for; the noises among them are left to :func:`noise_parameters`."""
-    return {name: value for name, value in errors.items()
-            if name in estimator.parameters and name not in NOISE_NAMES}
+    """The parameters that tell the estimator the stated sensor error models ``errors``
+    (stated name -> value; :meth:`Estimator.stated_parameters`: its parameter of that name or
+    of the same quantity under its own name); the noises among them are left to
+    :func:`noise_parameters`."""
+    stated = {name: value for name, value in errors.items() if name not in NOISE_NAMES}
+    return {name: value for name, value in estimator.core.stated_parameters(stated).items()
+            if name in estimator.parameters}
 
 
 def describe_errors(errors: dict[str, float]) -> str:

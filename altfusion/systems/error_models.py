@@ -6,7 +6,8 @@ from the sensor components, ``evaluate_scenarios.sensor_noise``): a barometer ca
 launch, how its error drifts, whether its error grows with height, the terrain under the
 rangefinders, the accelerometer's turn-on bias. :data:`SENSOR_ERRORS` states them per system
 under the names of the estimator parameters that take them; ``altfusion evaluate`` hands each
-value to every estimator that has a parameter of that name (as it hands the true noises), and
+value to every estimator that has a parameter of that name or of the same quantity under its
+own name (``Estimator.stated_parameters``; as it hands the true noises), and
 ``benchmarks/altitude_ekf_scenarios.py`` reads the same table. Every value is a fact of the
 system's sensors, weather or terrain, derived below from the constants that configure them,
 never a choice made to favour an estimator; a parameter not stated keeps the estimator's
