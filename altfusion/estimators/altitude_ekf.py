@@ -65,11 +65,12 @@ from altfusion.estimators.base import (
     BARO_ALL,
     GPS_ALL,
     LASER,
+    MAX_DELAY,
     RADAR,
     Estimator,
     HealthParams,
 )
-from altfusion.estimators.kalman import shift_state, update_scalar
+from altfusion.estimators.kalman import quadratic_form, shift_state, update_scalar
 from altfusion.params import param
 
 H, V, BA, D, K, T, G = range(7)
@@ -77,11 +78,6 @@ N = 7
 """Indices and size of the state vector [h, v, b_a, d, k, t, g]."""
 
 HEIGHT_REFERENCES = ("gps", "baro", "range")
-
-
-MAX_DELAY = 0.5
-"""Longest sensor delay, s: the state is taken back along the model over the delay with its
-process noise neglected (PX4 bounds its sensor delays at 0.3-0.5 s too)."""
 
 
 @dataclass(frozen=True)
@@ -372,7 +368,7 @@ class AltitudeEKF(Estimator):
         R = sigma * sigma * self._adaptation(source)
         if source == "baro":
             y = self._ground_effect(y)
-        S = sum(c * sum(c2 * self.P[i][j] for j, c2 in row) for i, c in row) + R
+        S = quadratic_form(self.P, row) + R
         if source in ("radar", "laser") and self._terrain_step(source, z, y, S):
             return
         if source == self._reference:

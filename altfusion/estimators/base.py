@@ -238,6 +238,11 @@ class HealthParams:
                                              "refused", min=0.0)
 
 
+MAX_DELAY = 0.5
+"""Longest sensor delay, s: the state is taken back along the model over the delay with its
+process noise neglected (PX4 bounds its sensor delays at 0.3-0.5 s too)."""
+
+
 def stream_inputs(streams: tuple[Stream, ...]) -> tuple[str, ...]:
     """The input names of ``streams`` in declaration order: values, count, time stamp,
     validity flag."""

@@ -221,6 +221,12 @@ def update_state_component(x: Vector, P: Matrix, index: int, z: float, variance:
     return x_new, P_new, y, S
 
 
+def quadratic_form(P: Matrix, H: Sequence[tuple[int, float]]) -> float:
+    """H P Hᵀ for a sparse row H ((state index, coefficient) pairs): the variance of the
+    measured combination of states, the innovation variance without R."""
+    return sum(c * sum(c2 * P[i][j] for j, c2 in H) for i, c in H)
+
+
 def update_scalar(x: Vector, P: Matrix, H: Sequence[tuple[int, float]], innovation: float,
                   variance: float) -> tuple[list[float], list[list[float]], float]:
     """:func:`update` for one scalar measurement whose Jacobian row H is sparse (given as

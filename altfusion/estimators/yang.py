@@ -71,6 +71,17 @@ Deviations from the paper:
   (fault suite ``all_fail``: 0.82 m RMS against 3x nominal 0.76 m); with g it is taken up
   (0.46 m). Without a radar (or over unknown terrain) leave it off: baro and GPS would both
   be relative and the height would drift as their offsets' random walks;
+* GNSS delay (``gps_delay``, AltitudeEKF's parameter; 0 by default, the paper's fusion at
+  the estimator's clock): the GPS vertical speed is fused against the speed taken back to
+  its instant s = gps_time - gps_delay along eq. (9)'s model, v(s) = v - δ·a with
+  δ = now - s. Under a Jacobi-type master (libcosim, ECOS) a sensor samples the plant one of
+  its steps before its stamp: at the closed-loop take-off of ``fault_demo_yang``
+  (±10-16 m/s²) the GPS speed was then up to 1.6 m/s off against its σ of 0.2 m/s, its gate
+  rejected it and the speeds that passed drove the accelerometer-bias state wrong (ECOS:
+  9.96 m RMS over the first 120 s; 1.62 m with ``gps_delay`` the GNSS's 0.1 s step). The
+  heights keep eq. (5) at their stamps: a delay moves one by v·δ (1 m at 10 m/s and 0.1 s)
+  against its 10-30 m noise, and unifying a delayed GPS height to the benchmark's instant
+  would extrapolate two noisy samples (eq. 5: 1.74 m instead of 1.62 m in that run);
 * health (estimators/base.py): a height source rejected for ``reset_timeout`` while another
   agrees is isolated (an isolated barometer with a constant offset is re-admitted with d
   reset onto it, :meth:`reset_offset`); with every height source rejected that long the
@@ -90,10 +101,19 @@ import math
 from collections import deque
 from dataclasses import dataclass
 
-from altfusion.estimators.base import ACC, BARO, GPS_VZ, RADAR, Estimator, HealthParams
+from altfusion.estimators.base import (
+    ACC,
+    BARO,
+    GPS_VZ,
+    MAX_DELAY,
+    RADAR,
+    Estimator,
+    HealthParams,
+)
 from altfusion.estimators.kalman import (
     constant_states_noise,
     predict_constant_acceleration,
+    quadratic_form,
     reset_state,
     update_scalar,
     update_state_component,
@@ -115,6 +135,9 @@ HEIGHT_ROWS = {"radar": ((0, 1.0),), "gps": ((0, 1.0), (5, 1.0)),
 OFFSET_STATE = {"baro": 4, "gps": 5}
 """The state of each height sensor's offset."""
 
+SPEED_ROW = ((1, 1.0),)
+"""H of the GPS vertical speed."""
+
 
 HEIGHT_STREAMS = (("baro", BARO, "baro_h", "baro_time"),
                   ("gps", GPS_VZ, "gps_h", "gps_time"),
@@ -125,6 +148,18 @@ HEIGHT_STREAMS = (("baro", BARO, "baro_h", "baro_time"),
 def _predicted(x, name: str) -> float:
     """The height sensor ``name``'s reading predicted from the state x."""
     return x[0] + x[OFFSET_STATE[name]] if name in OFFSET_STATE else x[0]
+
+
+def speed_row(delta: float) -> tuple[tuple[int, float], ...]:
+    """H of the GPS vertical speed taken ``delta`` before the state's time, along eq. (9)'s
+    constant-acceleration model: v(s) = v - δ·a (process noise over δ neglected, as
+    AltitudeEKF does)."""
+    return SPEED_ROW if delta == 0.0 else ((1, 1.0), (2, -delta))
+
+
+def predicted(x, row) -> float:
+    """H x for a sparse row H ((state index, coefficient) pairs)."""
+    return sum(c * x[i] for i, c in row)
 
 
 def unify_time(history, t_b: float) -> float:
@@ -184,6 +219,12 @@ class YangParams(HealthParams):
                                              "unbiased at the start; 0: no such state, the "
                                              "GPS an absolute height as in the paper); with "
                                              "fault_detection only", min=0.0)
+    gps_delay: float = param(0.0, "s", "Time from a GNSS measurement to its stamp: the GPS "
+                                       "vertical speed is fused against the speed at "
+                                       "gps_time - gps_delay (AltitudeEKF's and PX4's "
+                                       "EKF2_GPS_DELAY; a Jacobi or ECOS master samples the "
+                                       "plant one GNSS step before the stamp); not in the "
+                                       "paper", min=0.0, max=MAX_DELAY)
     gate_sigma: float = param(5.0, "1", "Gate on each height sample against the predicted "
                                         "height and on the GPS vertical speed against the "
                                         "predicted speed, in standard deviations (0: off); not "
@@ -251,14 +292,20 @@ class YangFusionKF(Estimator):
             else:
                 measurements.append((0, self.h_fused, self.fused_std**2))
         gps = samples.get(GPS_VZ)
-        if gps is not None and self._speed_passes(gps["gps_vz"]):
+        lag = 0.0 if gps is None or p.gps_delay == 0.0 else \
+            max(0.0, now - (gps["gps_time"] - p.gps_delay))
+        if gps is not None and self._speed_passes(gps["gps_vz"], lag):
             measurements.append((1, gps["gps_vz"], p.R_gps_vz))
         x, P = self.x, self.P                    # (12)-(14), H = I: the rows one by one
         for name, z in heights.items():
             x, P, _ = update_scalar(x, P, HEIGHT_ROWS[name], z - _predicted(x, name),
                                     self.variances[name])
         for index, z, R in measurements:
-            x, P, _, _ = update_state_component(x, P, index, z, R)
+            if index == 1 and lag > 0.0:         # the speed at its instant
+                row = speed_row(lag)
+                x, P, _ = update_scalar(x, P, row, z - predicted(x, row), R)
+            else:
+                x, P, _, _ = update_state_component(x, P, index, z, R)
         acc = samples.get(ACC)
         if acc is not None:                      # the IMU measures a + b (b = 0 in the paper)
             self.accept("acc")
@@ -278,8 +325,9 @@ class YangFusionKF(Estimator):
         return self.gate(name, z - _predicted(self.x, name), variance + self.variances[name],
                          self.params.gate_sigma)
 
-    def _speed_passes(self, vz: float) -> bool:
-        """The gate on the GPS vertical speed against the predicted speed (not in the paper;
+    def _speed_passes(self, vz: float, lag: float) -> bool:
+        """The gate on the GPS vertical speed against the predicted speed at its instant,
+        ``lag`` before the clock (``gps_delay``; not in the paper;
         none before the filter starts, whose speed is then a guess). The speed variance is
         overconfident at a closed-loop take-off: after ``reset_timeout`` of rejections the
         speed resets onto the GPS (base machinery). Gate and reset come together: with
@@ -287,7 +335,9 @@ class YangFusionKF(Estimator):
         if not (self.started and self.params.fault_detection):
             self.accept("gps_vz")
             return True
-        return self.gate("gps_vz", vz - self.x[1], self.P[1][1] + self.params.R_gps_vz,
+        row = speed_row(lag)
+        return self.gate("gps_vz", vz - predicted(self.x, row),
+                         quadratic_form(self.P, row) + self.params.R_gps_vz,
                          self.params.gate_sigma)
 
     def reset_height(self, source: str, innovation: float, variance: float) -> None:
