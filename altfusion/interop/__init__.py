@@ -7,6 +7,8 @@
   :class:`~altfusion.cosim.Results`;
 * :mod:`~altfusion.interop.proxy` runs it in ECOS's command-line host, a program without
   Python, with every FMU in its own ``proxyfmu`` process and libpython preloaded;
+* :mod:`~altfusion.interop.delays` sets the estimators' sensor delays a Jacobi-type master
+  (libcosim, ECOS) needs: each sample is one step of its sensor older than its stamp;
 * :mod:`~altfusion.interop.container` packs a subsystem into one FMU with
   ``fmu-manipulation-toolbox``;
 * :mod:`~altfusion.interop.compliance` checks FMUs (fmpy, the toolbox's FMI 2.0 checker) and SSP
