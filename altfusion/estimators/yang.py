@@ -116,7 +116,6 @@ from altfusion.estimators.kalman import (
     quadratic_form,
     reset_state,
     update_scalar,
-    update_state_component,
     white_jerk_noise,
 )
 from altfusion.params import param
@@ -128,8 +127,11 @@ HEIGHT_SENSORS = ("radar", "gps", "baro")
 ACC_ROW = ((2, 1.0), (3, 1.0))
 """H of the IMU acceleration: the acceleration plus the accelerometer bias."""
 
-HEIGHT_ROWS = {"radar": ((0, 1.0),), "gps": ((0, 1.0), (5, 1.0)),
-               "baro": ((0, 1.0), (4, 1.0))}
+HEIGHT_ROW = ((0, 1.0),)
+"""H of the height itself: the fused height y (eq. 12)."""
+
+HEIGHT_ROWS = {"radar": HEIGHT_ROW, "gps": (*HEIGHT_ROW, (5, 1.0)),
+               "baro": (*HEIGHT_ROW, (4, 1.0))}
 """H of each height sensor: the height, plus the sensor's offset for the GPS and the baro."""
 
 OFFSET_STATE = {"baro": 4, "gps": 5}
@@ -280,7 +282,7 @@ class YangFusionKF(Estimator):
             if self._gate(name, z):
                 self.history[name].append((sample[stamp], z))
                 arrived.add(name)
-        measurements = []                   # (state component measured, value, variance)
+        measurements = []                   # (H, value, variance)
         heights = {}
         benchmark = self._benchmark(now)
         if benchmark in arrived:
@@ -290,22 +292,18 @@ class YangFusionKF(Estimator):
             elif p.fault_detection:
                 heights = live
             else:
-                measurements.append((0, self.h_fused, self.fused_std**2))
+                measurements.append((HEIGHT_ROW, self.h_fused, self.fused_std**2))
         gps = samples.get(GPS_VZ)
         lag = 0.0 if gps is None or p.gps_delay == 0.0 else \
             max(0.0, now - (gps["gps_time"] - p.gps_delay))
         if gps is not None and self._speed_passes(gps["gps_vz"], lag):
-            measurements.append((1, gps["gps_vz"], p.R_gps_vz))
+            measurements.append((speed_row(lag), gps["gps_vz"], p.R_gps_vz))
         x, P = self.x, self.P                    # (12)-(14), H = I: the rows one by one
         for name, z in heights.items():
             x, P, _ = update_scalar(x, P, HEIGHT_ROWS[name], z - _predicted(x, name),
                                     self.variances[name])
-        for index, z, R in measurements:
-            if index == 1 and lag > 0.0:         # the speed at its instant
-                row = speed_row(lag)
-                x, P, _ = update_scalar(x, P, row, z - predicted(x, row), R)
-            else:
-                x, P, _, _ = update_state_component(x, P, index, z, R)
+        for row, z, R in measurements:
+            x, P, _ = update_scalar(x, P, row, z - predicted(x, row), R)
         acc = samples.get(ACC)
         if acc is not None:                      # the IMU measures a + b (b = 0 in the paper)
             self.accept("acc")
