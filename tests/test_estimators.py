@@ -296,3 +296,28 @@ def test_whang_calibrating_an_unknown_baro_offset_is_no_baro_fault():
     assert estimator.baro_rejected == 0 and estimator.n_height_resets == 0
     assert not estimator.status & source_bit("baro", SourceBit.ISOLATED)
     assert estimator.h_est == pytest.approx(430.0, abs=1.0)
+
+
+def test_hajiyev_h_std_is_honest_at_a_baro_sample_between_gps_samples():
+    """Baro (20 m) every 0.05 s, GPS (30 m) every 0.1 s, a static height, the paper's fixed
+    gain (adaptive false): at a baro-only step the estimate is h_B(new) + K·(h_GPS - h_B(old)),
+    whose variance is the fusion's P plus 2·K·R_B (1.9 P here), not P. The mean squared error
+    over the reported variance is 1 within 10 % at both kinds of step (3950 samples each,
+    correlated over a GPS cycle: about 3 % is one standard deviation of the ratio; measured
+    1.01 and 1.02; with P alone 1.9 at the baro-only steps)."""
+    params = HajiyevParams(R_baro=400.0, R_gps=900.0, drift_psd=0.0, adaptive=False)
+    estimator = HajiyevAdaptiveEstimator(params, step_size=0.05)
+    feeder, rng = StreamFeeder(estimator), np.random.default_rng(11)
+    errors, variances = {False: [], True: []}, {False: [], True: []}
+    for n in range(8000):
+        samples = {"baro": {"baro_h": 100.0 + 20.0 * rng.standard_normal()}}
+        gps = n % 2 == 1
+        if gps:
+            samples["gps"] = {"gps_h": 100.0 + 30.0 * rng.standard_normal()}
+        feeder.step(**samples)
+        if n > 100:
+            errors[gps].append(estimator.h_est - 100.0)
+            variances[gps].append(estimator.h_std**2)
+    for gps in (False, True):
+        ratio = np.mean(np.square(errors[gps])) / np.mean(variances[gps])
+        assert ratio == pytest.approx(1.0, abs=0.1), (gps, ratio)
