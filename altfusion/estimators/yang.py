@@ -147,11 +147,6 @@ HEIGHT_STREAMS = (("baro", BARO, "baro_h", "baro_time"),
 """Each height sensor's stream, height input and time-stamp input."""
 
 
-def _predicted(x, name: str) -> float:
-    """The height sensor ``name``'s reading predicted from the state x."""
-    return x[0] + x[OFFSET_STATE[name]] if name in OFFSET_STATE else x[0]
-
-
 def speed_row(delta: float) -> tuple[tuple[int, float], ...]:
     """H of the GPS vertical speed taken ``delta`` before the state's time, along eq. (9)'s
     constant-acceleration model: v(s) = v - δ·a (process noise over δ neglected, as
@@ -300,8 +295,8 @@ class YangFusionKF(Estimator):
             measurements.append((speed_row(lag), gps["gps_vz"], p.R_gps_vz))
         x, P = self.x, self.P                    # (12)-(14), H = I: the rows one by one
         for name, z in heights.items():
-            x, P, _ = update_scalar(x, P, HEIGHT_ROWS[name], z - _predicted(x, name),
-                                    self.variances[name])
+            row = HEIGHT_ROWS[name]
+            x, P, _ = update_scalar(x, P, row, z - predicted(x, row), self.variances[name])
         for row, z, R in measurements:
             x, P, _ = update_scalar(x, P, row, z - predicted(x, row), R)
         acc = samples.get(ACC)
@@ -320,8 +315,8 @@ class YangFusionKF(Estimator):
         offset = OFFSET_STATE.get(name)
         variance = P[0][0] if offset is None else \
             P[0][0] + 2.0 * P[0][offset] + P[offset][offset]
-        return self.gate(name, z - _predicted(self.x, name), variance + self.variances[name],
-                         self.params.gate_sigma)
+        return self.gate(name, z - predicted(self.x, HEIGHT_ROWS[name]),
+                         variance + self.variances[name], self.params.gate_sigma)
 
     def _speed_passes(self, vz: float, lag: float) -> bool:
         """The gate on the GPS vertical speed against the predicted speed at its instant,
