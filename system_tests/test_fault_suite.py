@@ -165,10 +165,16 @@ EVALUATED_RUNS = {
     ("gnss_outage_return_off", "XuSHAEKF", 1): "the GNSS back 50 m off under a 37 m spread: "
                                                "its window mean stayed below the 6-sigma "
                                                "sample gate",
+    ("gnss_outage_return_off", "WhangGAEstimator", 2): "the GNSS back 50 m off: its window "
+                                                       "mean hovered about the bias test's "
+                                                       "threshold, so a sample passed now and "
+                                                       "then, restarted the time to isolation "
+                                                       "and moved the baro bias onto the "
+                                                       "offset (never isolated, 44 m RMS)",
 }
 """(fault, estimator, run index of ``altfusion evaluate``'s master seed 0) -> what failed in
 that Monte Carlo run before the bias test's window was used (base.py: ``_pin``, ``_agrees``,
-BIAS_SIGMAS); the fault suite above flies one seed only."""
+BIAS_SIGMAS, the bias test's hysteresis); the fault suite above flies one seed only."""
 
 
 @pytest.fixture(scope="module")
