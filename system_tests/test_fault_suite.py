@@ -81,6 +81,23 @@ def error(results, estimator: str) -> np.ndarray:
     return results[f"{estimator}.h_est"] - results["plant.h"]
 
 
+def assert_isolated(results, estimator: str, scenario, sources) -> None:
+    """Each of ``sources`` isolated within ISOLATION_DEADLINE of the fault's start."""
+    for source in sources:
+        elapsed = scores.isolation_time(results.time, results[f"{estimator}.status"], source,
+                                        scenario.start)
+        assert elapsed is not None and elapsed <= ISOLATION_DEADLINE, (source, elapsed)
+
+
+def assert_recovered(results, nominal, estimator: str, scenario) -> None:
+    """After the transient the error within 3x the nominal run's RMS, or h_valid false."""
+    passed, faulty_rms, nominal_rms = scores.recovered(
+        results.time, error(results, estimator), results[f"{estimator}.h_valid"],
+        error(nominal, estimator), nominal[f"{estimator}.h_valid"],
+        scenario.start + scenario.transient)
+    assert passed, f"RMS {faulty_rms:.3g} m > 3 x nominal {nominal_rms:.3g} m"
+
+
 @pytest.mark.parametrize("fault", ("none", *FAULTS))
 def test_run_completes_and_every_estimator_output_is_finite(suite, fault):
     results, failure = suite[fault]
@@ -98,10 +115,7 @@ def test_faulty_source_is_isolated_within_10_s(suite, request, fault, estimator)
         pytest.skip(f"{estimator} does not read {scenario.faulty}")
     known(request, "isolation", fault, estimator)
     results, _ = suite[fault]
-    for source in sources:
-        elapsed = scores.isolation_time(results.time, results[f"{estimator}.status"], source,
-                                        scenario.start)
-        assert elapsed is not None and elapsed <= ISOLATION_DEADLINE, (source, elapsed)
+    assert_isolated(results, estimator, scenario, sources)
 
 
 @pytest.mark.parametrize("estimator", ESTIMATORS)
@@ -112,11 +126,7 @@ def test_error_returns_within_3x_nominal_rms_or_output_invalid(suite, request, f
     scenario = FAULTS[fault]
     results, _ = suite[fault]
     nominal, _ = suite["none"]
-    passed, faulty_rms, nominal_rms = scores.recovered(
-        results.time, error(results, estimator), results[f"{estimator}.h_valid"],
-        error(nominal, estimator), nominal[f"{estimator}.h_valid"],
-        scenario.start + scenario.transient)
-    assert passed, f"RMS {faulty_rms:.3g} m > 3 x nominal {nominal_rms:.3g} m"
+    assert_recovered(results, nominal, estimator, scenario)
 
 
 @pytest.mark.parametrize("estimator", ESTIMATORS)
@@ -173,8 +183,8 @@ EVALUATED_RUNS = {
                                                        "offset (never isolated, 44 m RMS)",
 }
 """(fault, estimator, run index of ``altfusion evaluate``'s master seed 0) -> what failed in
-that Monte Carlo run before the bias test's window was used (base.py: ``_pin``, ``_agrees``,
-BIAS_SIGMAS, the bias test's hysteresis); the fault suite above flies one seed only."""
+that Monte Carlo run before the bias test judged by its window (base.py: ``_pin``,
+``_agrees``, BIAS_SIGMAS, the hysteresis); the fault suite above flies one seed only."""
 
 
 @pytest.fixture(scope="module")
@@ -200,12 +210,5 @@ def test_a_failed_source_is_isolated_in_the_monte_carlo_runs_that_once_missed_it
         evaluated_runs, fault, estimator, index):
     scenario = FAULTS[fault]
     results, nominal = evaluated_runs[fault, index]
-    for source in scenario.faulty:
-        elapsed = scores.isolation_time(results.time, results[f"{estimator}.status"], source,
-                                        scenario.start)
-        assert elapsed is not None and elapsed <= ISOLATION_DEADLINE, (source, elapsed)
-    passed, faulty_rms, nominal_rms = scores.recovered(
-        results.time, error(results, estimator), results[f"{estimator}.h_valid"],
-        error(nominal, estimator), nominal[f"{estimator}.h_valid"],
-        scenario.start + scenario.transient)
-    assert passed, f"RMS {faulty_rms:.3g} m > 3 x nominal {nominal_rms:.3g} m"
+    assert_isolated(results, estimator, scenario, scenario.faulty)
+    assert_recovered(results, nominal, estimator, scenario)

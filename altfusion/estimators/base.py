@@ -660,10 +660,9 @@ class Estimator(Component):
 
     def _pin(self, source: str) -> float:
         """How far from the prediction height source ``source`` lets the height be: its
-        last gate half-width, or tighter, the mean of its bias window plus
-        that window's threshold (:data:`BIAS_SIGMAS` at most) in standard deviations of
-        the mean (a 30 m GNSS at 10 Hz pins the
-        height to 30 m over 2.5 s, not to one sample's 150 m gate)."""
+        last gate half-width or, tighter, the mean of its bias window plus that window's
+        threshold (:data:`BIAS_SIGMAS` at most) in standard deviations of the mean (a 30 m
+        GNSS at 10 Hz pins the height to 30 m over 2.5 s, not to one sample's 150 m gate)."""
         pin = self._gate_width.get(source, math.inf)
         window = self._innovations.get(source)
         if window is not None and window.n >= BIAS_MIN_SAMPLES:
