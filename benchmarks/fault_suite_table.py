@@ -19,7 +19,7 @@ import numpy as np
 from altfusion.cosim import Simulation
 from altfusion.replay.system import CATALOG_ESTIMATORS
 from altfusion.scores import coverage, isolation_time, recovered, window_rms
-from altfusion.systems.faults import FAULTS, fault_flight, fault_parameters, with_fault
+from altfusion.systems.faults import FAULTS, fault_flight, run_parameters, with_fault
 
 MODELS = Path(__file__).resolve().parents[1] / "models"
 ESTIMATORS = tuple(CATALOG_ESTIMATORS)
@@ -54,8 +54,7 @@ def main() -> None:
     system = with_fault(fault_flight(ESTIMATORS), next(iter(FAULTS)))
     fmus = {c.fmu: MODELS / f"{c.fmu}.fmu" for c in system.components}
     with Simulation(system, fmus, "core") as simulation:
-        runs = {fault: simulation.run(parameters={f"fault.{k}": v for k, v in
-                                                  fault_parameters(fault).items()})
+        runs = {fault: simulation.run(parameters=run_parameters(fault))
                 for fault in ("none", *FAULTS)}
     print(f"| scenario | {' | '.join(ESTIMATORS)} |")
     print(f"|---|{'---|' * len(ESTIMATORS)}")

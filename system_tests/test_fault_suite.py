@@ -33,7 +33,7 @@ from altfusion import scores
 from altfusion.cosim.runner import RunFailedError, Simulation
 from altfusion.montecarlo.seeds import run_seeds, seeded_components
 from altfusion.replay.system import CATALOG_ESTIMATORS
-from altfusion.systems.faults import FAULTS, fault_flight, fault_parameters, with_fault
+from altfusion.systems.faults import FAULTS, fault_flight, run_parameters, with_fault
 
 ESTIMATORS = tuple(CATALOG_ESTIMATORS)
 ISOLATION_DEADLINE = 10.0
@@ -63,9 +63,8 @@ def suite(fmus):
     runs = {}
     with Simulation(spec, fmus) as simulation:
         for fault in ("none", *FAULTS):
-            parameters = {f"fault.{k}": v for k, v in fault_parameters(fault).items()}
             try:
-                runs[fault] = (simulation.run(parameters=parameters), None)
+                runs[fault] = (simulation.run(parameters=run_parameters(fault)), None)
             except RunFailedError as error:
                 runs[fault] = (error.results, str(error))
     return runs
@@ -198,10 +197,8 @@ def evaluated_runs(fmus):
     with Simulation(spec, fmus) as simulation:
         for fault, index in sorted({(fault, index) for fault, _, index in EVALUATED_RUNS}):
             seeds = run_seeds(0, index, seeded)
-            runs[fault, index] = tuple(
-                simulation.run(parameters=seeds | {f"fault.{k}": v
-                                                   for k, v in fault_parameters(name).items()})
-                for name in (fault, "none"))
+            runs[fault, index] = tuple(simulation.run(parameters=seeds | run_parameters(name))
+                                       for name in (fault, "none"))
     return runs
 
 

@@ -136,6 +136,13 @@ def fault_parameters(fault: str) -> dict[str, Any]:
     return {"scenario": fault, "fault_start": scenario.start, **scenario.parameters}
 
 
+def run_parameters(fault: str) -> dict[str, Any]:
+    """The parameter overrides {'fault.<name>': value} that switch a system built by
+    :func:`with_fault` (with any scenario) to scenario ``fault`` for one run, so that one
+    instantiated simulation flies every scenario."""
+    return {f"{FAULT_COMPONENT}.{name}": value for name, value in fault_parameters(fault).items()}
+
+
 def with_fault(spec: SystemSpec, fault: str) -> SystemSpec:
     """``spec`` with fault scenario ``fault`` applied by a SensorFaults component named
     ``fault`` between the sensor outputs and every input they drove, named
