@@ -92,7 +92,7 @@ def build_fmu(script: Path, dest: Path = MODELS, core: Path | None = None,
     fmu = Path(FmuBuilder.build_FMU(
         staged, dest=dest, project_files=[core, *bundled_files(script)],
         canGetAndSetFMUstate=True, canSerializeFMUstate=True,
-        canHandleVariableCommunicationStepSize=False,
+        canHandleVariableCommunicationStepSize=True,
     ))
     install_shim(fmu, shim)
     return fmu

@@ -20,8 +20,9 @@ def _yes(flag) -> str:
 
 def _capabilities(md) -> str:
     cs = md.coSimulation
-    step = ("fixed: the `step_size` parameter, or the first doStep's step if it is 0"
-            if not cs.canHandleVariableCommunicationStepSize else "variable")
+    step = ("any (the instance ticks on its `step_size`; [signal contract](../signals.md))"
+            if cs.canHandleVariableCommunicationStepSize
+            else "fixed: the `step_size` parameter, or the first doStep's step if it is 0")
     return (f"FMI {md.fmiVersion} co-simulation, model identifier `{cs.modelIdentifier}`; "
             f"communication step {step}; FMU state get/set {_yes(cs.canGetAndSetFMUstate)}, "
             f"serialize {_yes(cs.canSerializeFMUstate)}.")

@@ -30,10 +30,12 @@ FMI behaviour that pythonfmu 0.7.0 leaves to us:
   to the module's dict it does not own and keeps a list referring to every class it finds;
   the metaclass :class:`~altfusion.fmi.reexec.ReusedSlaveClass` balances the release and
   hands back the existing class so that nothing new is kept (see that module).
-* ``step_size`` 0 (the default) adopts the first doStep's step: until then the core runs on
-  the default experiment's step (initial outputs), and the first doStep rebuilds the not yet
-  stepped core on the host's step, which checks every sample period against it. A later
-  different step is refused (logged at fmi2Error, fmi2Discard).
+* Any communication step is taken (``canHandleVariableCommunicationStepSize``): the core ticks
+  on its own step, ``step_size`` (:mod:`altfusion.timegrid`), running every tick that falls
+  within the host's step. ``step_size`` 0 (the default) adopts a tick at the first doStep:
+  until then the core runs on the default experiment's step (initial outputs), and the first
+  doStep rebuilds the not yet stepped core on the host's step if the parameters fit it (every
+  sample period a multiple), else on the default step or the core's own natural step.
 * The modelDescription gets UnitDefinitions, per-variable units and bounds, output dependencies,
   InitialUnknowns and a VendorAnnotation with the core version and core class.
 * In Initialization Mode, outputs follow the parameters and inputs set so far: a set marks the
@@ -69,15 +71,20 @@ from altfusion.version import CORE_VERSION
 VENDOR_TOOL = "altfusion"
 
 ADOPT_FIRST_STEP = 0.0
-"""``step_size`` value meaning: the step of the first doStep."""
+"""``step_size`` value meaning: the step of the first doStep (see ``CoreSlave._adopt_step``)."""
+
+MIN_ADOPTED_STEP = 1e-4
+"""Shortest first doStep adopted as the tick, s: a shorter one (a host's tiny remainder step)
+would make every later step run thousands of ticks."""
 
 STEP_SIZE = ParamInfo(
     name="step_size",
     type=float,
     default=ADOPT_FIRST_STEP,
     unit="s",
-    description="Communication step size of this instance; 0 (default): the step of the first "
-                "doStep. Every doStep must then use exactly this step",
+    description="Internal step (tick) of this instance: samples, filter steps and outputs fall "
+                "on its multiples, whatever the host's communication steps; 0 (default): the "
+                "first doStep's step if the parameters fit it, else 0.01 s",
     min=0.0,
     max=None,
     positive=False,
@@ -222,17 +229,26 @@ class CoreSlave(Fmi2Slave, metaclass=ReusedSlaveClass):
                                     resources=self.resources)
 
     def _adopt_step(self, step_size: float) -> bool:
-        """Take the first doStep's step as ``step_size`` and rebuild the core on it (False,
-        with the reason logged, if the parameters do not fit that step)."""
-        self._step_size = float(step_size)
-        try:
-            self._rebuild_core()
-        except Exception as error:
-            self._failure = (f"step_size adopted from the first doStep ({step_size!r} s): "
-                             f"{error}")
-            self._log(Fmi2Status.error, f"cannot step, {self._failure}")
-            return False
-        return True
+        """Choose the tick of a ``step_size`` 0 instance at its first doStep and rebuild the
+        core on it: the host's step if the core takes it and it is at least
+        ``MIN_ADOPTED_STEP``, else the default step, else the core's own
+        :meth:`~altfusion.component.Component.natural_step` (False, with the reasons logged,
+        if none fits the parameters)."""
+        candidates = [step_size] if step_size >= MIN_ADOPTED_STEP else []
+        candidates += [DEFAULT_STEP_SIZE, self.core_class.natural_step(self._params)]
+        reasons = []
+        for candidate in dict.fromkeys(c for c in candidates if c is not None):
+            self._step_size = float(candidate)
+            try:
+                self._rebuild_core()
+                return True
+            except Exception as error:
+                reasons.append(f"{candidate!r} s: {error}")
+        self._step_size = ADOPT_FIRST_STEP
+        self._failure = ("no internal step fits the parameters (tried the first doStep's "
+                         f"step, the default and the core's own: {'; '.join(reasons)})")
+        self._log(Fmi2Status.error, f"cannot step, {self._failure}")
+        return False
 
     def setup_experiment(self, start_time: float, stop_time=None, tolerance=None) -> None:
         self._start_time = float(start_time)
