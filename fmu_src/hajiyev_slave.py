@@ -14,4 +14,4 @@ class HajiyevAdaptiveEstimator(fmi.CoreSlave):
         fmi.Output("gain", "1", "Filter gain K(k) (eqs. 16, 27)"),
         fmi.Output("residual", "m", "Residual Δ(k) = h_GPS - h_B (eq. 18)"),
         fmi.Output("normalized_residual", "1", "Normalised residual (eq. 34)"),
-    ))
+    ), initial_depends_on={"h_est": ("baro_h",), "status": ("baro_count",)})

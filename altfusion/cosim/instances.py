@@ -81,7 +81,9 @@ class FmuInfo:
     core_class: str | None
     variables: dict[str, Variable]
     feedthrough_inputs: frozenset[str]
-    """Inputs that some output depends on directly (ModelStructure dependencies)."""
+    """Inputs read at the end of a step: our FMUs list them in their VendorAnnotation
+    (``Core stepEndInputs``), another FMU's are the inputs its outputs depend on directly
+    (ModelStructure dependencies)."""
 
 
 _INFO_CACHE: dict[Path, FmuInfo] = {}
@@ -111,10 +113,14 @@ def fmu_info(path: Path) -> FmuInfo:
         for v in md.modelVariables
     }
     inputs = {v.name for v in md.modelVariables if v.causality == "input"}
-    feedthrough: set[str] = set()
-    for unknown in md.outputs:
-        deps = unknown.dependencies
-        feedthrough |= inputs if deps is None else {d.name for d in deps}
+    step_end = core.get("stepEndInputs") if core is not None else None
+    if step_end is not None:
+        feedthrough = set(step_end.split())
+    else:
+        feedthrough = set()
+        for unknown in md.outputs:
+            deps = unknown.dependencies
+            feedthrough |= inputs if deps is None else {d.name for d in deps}
     info = FmuInfo(
         path=path,
         model_name=md.modelName,

@@ -36,8 +36,11 @@ FMI behaviour that pythonfmu 0.7.0 leaves to us:
   until then the core runs on the default experiment's step (initial outputs), and the first
   doStep rebuilds the not yet stepped core on the host's step if the parameters fit it (every
   sample period a multiple), else on the default step or the core's own natural step.
-* The modelDescription gets UnitDefinitions, per-variable units and bounds, output dependencies,
-  InitialUnknowns and a VendorAnnotation with the core version and core class.
+* The modelDescription gets UnitDefinitions, per-variable units and bounds, the outputs'
+  dependencies (none: outputs change only in doStep), InitialUnknowns with the inputs each
+  initial value follows, and a VendorAnnotation with the core version, the core class and the
+  inputs read at the end of a step (its ``stepEndInputs``,
+  :class:`~altfusion.fmi.variables.Output`).
 * In Initialization Mode, outputs follow the parameters and inputs set so far: a set marks the
   core stale and the next get rebuilds it. Importers may set parameters after
   ``enterInitializationMode`` (ECOS applies the SSP parameter set there) and then iterate their
@@ -461,7 +464,8 @@ class CoreSlave(Fmi2Slave, metaclass=ReusedSlaveClass):
         tool = SubElement(vendor, "Tool", {"name": VENDOR_TOOL})
         core = self.core_class
         SubElement(tool, "Core", {"version": CORE_VERSION,
-                                  "class": f"{public_module(core.__module__)}:{core.__qualname__}"})
+                                  "class": f"{public_module(core.__module__)}:{core.__qualname__}",
+                                  "stepEndInputs": " ".join(self._step_end_inputs())})
         model_variables = root.find("ModelVariables")
         root.insert(list(root).index(model_variables), vendor)
         index_of: dict[str, int] = {}
@@ -495,20 +499,33 @@ class CoreSlave(Fmi2Slave, metaclass=ReusedSlaveClass):
         return specs
 
     def _write_model_structure(self, structure: Element, index_of: dict[str, int]) -> None:
+        """Outputs with no direct dependency (they change only in doStep), InitialUnknowns
+        with the inputs each initial value follows (``Output.initial_depends_on``)."""
         input_names = [v.name for v in self.variables if isinstance(v, Input)]
         outputs = [v for v in self.variables if isinstance(v, Output)]
         if not outputs:
             return
+        for var in outputs:
+            unknown = set(var.initial_depends_on) | set(var.reads_at_step_end or ())
+            unknown -= set(input_names)
+            if unknown:
+                raise ValueError(f"output {var.name} names unknown inputs {unknown}")
         outputs_node = SubElement(structure, "Outputs")
         for var in outputs:
-            depends = input_names if var.depends_on is None else list(var.depends_on)
-            unknown = set(depends) - set(input_names)
-            if unknown:
-                raise ValueError(f"output {var.name} depends on unknown inputs {unknown}")
-            SubElement(outputs_node, "Unknown", {
-                "index": str(index_of[var.name]),
-                "dependencies": " ".join(str(index_of[n]) for n in depends),
-            })
+            SubElement(outputs_node, "Unknown", {"index": str(index_of[var.name]),
+                                                 "dependencies": ""})
         initial = SubElement(structure, "InitialUnknowns")
         for var in outputs:
-            SubElement(initial, "Unknown", {"index": str(index_of[var.name])})
+            SubElement(initial, "Unknown", {
+                "index": str(index_of[var.name]),
+                "dependencies": " ".join(str(index_of[n]) for n in var.initial_depends_on),
+            })
+
+    def _step_end_inputs(self) -> list[str]:
+        """The inputs some output reads at the end of a step (``Output.reads_at_step_end``)."""
+        inputs = [v.name for v in self.variables if isinstance(v, Input)]
+        read = set()
+        for var in self.variables:
+            if isinstance(var, Output):
+                read |= set(inputs if var.reads_at_step_end is None else var.reads_at_step_end)
+        return [name for name in inputs if name in read]
