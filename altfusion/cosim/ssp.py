@@ -92,7 +92,10 @@ def system_structure(system: SystemSpec, fmu_paths: dict[str, Path],
                      step_hints: bool = False) -> ET.Element:
     """The SystemStructureDescription element of ``system`` (with ``step_hints``, each
     component's ``osp:StepSizeHint``: :data:`OSP_SSD`)."""
-    root = ET.Element(_q("ssd", "SystemStructureDescription"), version="1.0", name=system.name,
+    # The OSP description's own name: OMSimulator's Python API takes every .ssd of an archive
+    # as a variant, named after it.
+    name = f"{system.name}_osp" if step_hints else system.name
+    root = ET.Element(_q("ssd", "SystemStructureDescription"), version="1.0", name=name,
                       generationTool=f"altfusion {CORE_VERSION}")
     sys_el = ET.SubElement(root, _q("ssd", "System"), name=system.name,
                            description=system.description)
