@@ -87,7 +87,12 @@ class Component(ABC):
         for each tick of the component's step that falls within it (none for a step shorter
         than what is left of the current tick; see :mod:`altfusion.timegrid`)."""
         clock = self.clock
-        for _ in range(clock.due(current_time, step_size)):
+        due = clock.due(current_time, step_size)
+        if due == 1:                            # the usual request: the fast path
+            clock.tick()
+            self.update()
+            return
+        for _ in range(due):
             clock.tick()
             self.update()
 

@@ -47,8 +47,8 @@ class TickClock:
         self.ticks = 0
         self.now = self.time(0)
         """The current time, s (:meth:`time` of the current tick, kept at each tick)."""
-        self.host_time = self.now
-        """Where the host's last doStep ended, s (:attr:`now` while it steps on the grid)."""
+        self._on_grid = True
+        self._host_end = self.now
 
     def time(self, ticks: int | None = None) -> float:
         """Time at ``ticks`` steps after the start (default: the current tick), in s."""
@@ -78,10 +78,8 @@ class TickClock:
         ``current_time`` must be where the previous request ended (within the tolerance) and
         ``step_size`` positive and finite; the request ends at ``current_time + step_size``.
         """
-        if (abs(step_size - self.step_size) <= self._step_tolerance
-                and abs(current_time - self.now) <= self._time_tolerance
-                and self.host_time == self.now):
-            self.host_time = (self._start_num + (self.ticks + 1) * self._step_num) / self._den
+        if (self._on_grid and abs(step_size - self.step_size) <= self._step_tolerance
+                and abs(current_time - self.now) <= self._time_tolerance):
             return 1
         if not (step_size > 0.0 and math.isfinite(step_size)):
             raise StepError(f"communication step {step_size!r} s: must be positive and finite")
@@ -89,12 +87,17 @@ class TickClock:
             raise StepError(f"doStep at t = {current_time!r} s, but this component is at "
                             f"t = {self.host_time!r} s")
         end = current_time + step_size
-        last = math.floor((end - self._start_time) / self.step_size + TICK_TOLERANCE)
-        due = max(0, last - self.ticks)
-        on_grid = self.time(last)
+        last = max(self.ticks,
+                   math.floor((end - self._start_time) / self.step_size + TICK_TOLERANCE))
         # A step ending on a tick puts the host back on the grid (the fast path again).
-        self.host_time = on_grid if abs(end - on_grid) <= self._time_tolerance else end
-        return due
+        self._on_grid = abs(end - self.time(last)) <= self._time_tolerance
+        self._host_end = end
+        return last - self.ticks
+
+    @property
+    def host_time(self) -> float:
+        """Where the host's last doStep ended, s (:attr:`now` while it steps on the grid)."""
+        return self.now if self._on_grid else self._host_end
 
     def tick(self) -> None:
         """Move one tick ahead."""

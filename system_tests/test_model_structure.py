@@ -9,27 +9,17 @@ missing (a host would order components wrongly), none false (a host would see lo
 """
 
 import math
-import shutil
 from pathlib import Path
 
 import pytest
-from fmpy import extract, read_model_description
-from fmpy.fmi2 import FMU2Slave
+from fmpy import read_model_description
+
+from altfusion.cosim.instances import FmuInstance, fmu_info
 
 PERTURBATIONS = {"Real": (0.37, 1000.0, -1000.0), "Integer": (3,), "Boolean": (None,)}
 """Values added to a Real's start (0.37 scaled by its size, then ±1000 set outright: large
 enough to lift a resting vehicle or saturate a controller), added to an Integer, and a
 Boolean flipped."""
-
-
-def _get(fmu: FMU2Slave, var) -> object:
-    read = {"Real": fmu.getReal, "Integer": fmu.getInteger, "Boolean": fmu.getBoolean}
-    return read[var.type]([var.valueReference])[0]
-
-
-def _set(fmu: FMU2Slave, var, value) -> None:
-    write = {"Real": fmu.setReal, "Integer": fmu.setInteger, "Boolean": fmu.setBoolean}
-    write[var.type]([var.valueReference], [value])
 
 
 def _start(var) -> object:
@@ -53,36 +43,34 @@ def _same(a, b) -> bool:
 
 
 def observed_dependencies(path: Path, stepped: bool) -> dict[str, set[str]]:
-    """Output name -> the inputs whose change changes it without a step."""
-    md = read_model_description(str(path))
-    folder = extract(str(path))
-    inputs = [v for v in md.modelVariables if v.causality == "input"]
-    outputs = [v for v in md.modelVariables if v.causality == "output"]
-    fmu = FMU2Slave(guid=md.guid, unzipDirectory=folder, instanceName="probe",
-                    modelIdentifier=md.coSimulation.modelIdentifier)
+    """Output name -> the inputs whose change changes it without a step (through our
+    runner's fmpy instance, whose logger outlives any other fmpy user in the process)."""
+    variables = read_model_description(str(path)).modelVariables
+    inputs = [v for v in variables if v.causality == "input"]
+    outputs = [v for v in variables if v.causality == "output"]
+    instance = FmuInstance("probe", fmu_info(path))
+
+    def read() -> dict[str, object]:
+        return {o.name: instance.get(o.type, [o.valueReference])[0] for o in outputs}
+
     found = {o.name: set() for o in outputs}
     try:
-        fmu.instantiate()
-        fmu.setupExperiment(startTime=0.0)
-        fmu.enterInitializationMode()
+        instance.initialize({}, 0.0, 0.0, 1.0)
         if stepped:
-            fmu.exitInitializationMode()
-            fmu.doStep(0.0, 0.01)
+            instance.exit_initialization()
+            instance.do_step(0.0, 0.01)
         for var in inputs:
-            baseline = {o.name: _get(fmu, o) for o in outputs}
+            baseline = read()
             for value in _values(var):
-                _set(fmu, var, value)
-                for o in outputs:
-                    if not _same(baseline[o.name], _get(fmu, o)):
-                        found[o.name].add(var.name)
-            _set(fmu, var, _start(var))
-            restored = {o.name: _get(fmu, o) for o in outputs}
+                instance.set(var.type, [var.valueReference], [value])
+                found_now = read()
+                found.update({n: found[n] | {var.name} for n in found
+                              if not _same(baseline[n], found_now[n])})
+            instance.set(var.type, [var.valueReference], [_start(var)])
+            restored = read()
             assert all(_same(baseline[n], restored[n]) for n in baseline), var.name
-        if stepped:
-            fmu.terminate()
     finally:
-        fmu.freeInstance()
-        shutil.rmtree(folder, ignore_errors=True)
+        instance.free()
     return found
 
 
