@@ -13,8 +13,8 @@ from altfusion.cosim.runner import RunFailedError, Simulation
 from altfusion.cosim.settings import parse_settings
 from altfusion.cosim.ssp import LoadedSystem, read_ssp
 from altfusion.errors import ParameterError, UsageError
+from altfusion.evaluation.command import add_command as add_evaluate_command
 from altfusion.montecarlo.commands import add_commands as add_montecarlo_commands
-from altfusion.montecarlo.evaluate_command import add_command as add_evaluate_command
 from altfusion.replay.system import CATALOG_ESTIMATORS
 
 INCOMPLETE = ".incomplete"

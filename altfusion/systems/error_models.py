@@ -2,7 +2,7 @@
 
 An engineer configuring an estimator for a system's sensors tells it what the sensors' data
 sheets and the flight say, not only their white noise (which ``altfusion evaluate`` derives
-from the sensor components, ``evaluate_scenarios.sensor_noise``): a barometer calibrated at
+from the sensor components, ``evaluation.scenarios.sensor_noise``): a barometer calibrated at
 launch, how its error drifts, whether its error grows with height, the terrain under the
 rangefinders, the accelerometer's turn-on bias. :data:`SENSOR_ERRORS` states them per system
 under the names of the estimator parameters that take them; ``altfusion evaluate`` hands each

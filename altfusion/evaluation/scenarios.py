@@ -42,7 +42,7 @@ from typing import Any
 from altfusion.cosim.instances import fmu_info
 from altfusion.cosim.system import ComponentSpec, Metric, SystemSpec
 from altfusion.estimators.base import HEIGHT_SOURCES, Estimator
-from altfusion.montecarlo.evaluate_metrics import Fault
+from altfusion.evaluation.metrics import Fault
 from altfusion.montecarlo.source import CampaignError
 from altfusion.systems.catalog import build_system
 from altfusion.systems.error_models import SENSOR_ERRORS

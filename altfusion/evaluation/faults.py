@@ -5,7 +5,7 @@ nominal RMS of each estimator) and with each fault of :data:`~altfusion.systems.
 The flight is closed on the true altitude, so every estimator is an observer: each is a
 component named after its FMU, connected by contract names to the five sensors, given the
 flight's true sensor noise (the flight's own choices for the estimators it knows, then
-:func:`~.evaluate_scenarios.noise_parameters`). An estimator reading none of the sensors a
+:func:`~.scenarios.noise_parameters`). An estimator reading none of the sensors a
 fault needs (``FaultScenario.needs``) is n/a for that fault: the fault tells nothing about it.
 
 Rate: the flight's own (:func:`~altfusion.systems.faults.fault_flight`: plant, fast
@@ -26,8 +26,8 @@ from dataclasses import replace
 from pathlib import Path
 
 from altfusion.cosim.system import ComponentSpec
-from altfusion.montecarlo.evaluate_metrics import Fault
-from altfusion.montecarlo.evaluate_scenarios import (
+from altfusion.evaluation.metrics import Fault
+from altfusion.evaluation.scenarios import (
     EstimatorInfo,
     Scenario,
     noise_parameters,
