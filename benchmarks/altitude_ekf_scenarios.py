@@ -21,11 +21,11 @@ from pathlib import Path
 import numpy as np
 
 from altfusion.cosim import Simulation
-from altfusion.cosim.system import ComponentSpec
 from altfusion.estimators.altitude_ekf import AltitudeEKF
 from altfusion.evaluation.scenarios import sensor_noise
 from altfusion.systems import build_system
 from altfusion.systems.error_models import SENSOR_ERRORS
+from altfusion.systems.spec import ComponentSpec
 from altfusion.systems.wiring import estimator_connections
 
 MODELS = Path(__file__).resolve().parent.parent / "models"

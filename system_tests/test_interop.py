@@ -30,13 +30,7 @@ pytest.importorskip("ecospy", reason="the interop extra is not installed")
 pytest.importorskip("fmu_manipulation_toolbox", reason="the interop extra is not installed")
 
 from altfusion.constants import G0, R_AIR  # noqa: E402
-from altfusion.cosim import (  # noqa: E402
-    ComponentSpec,
-    Connection,
-    SystemSpec,
-    simulate,
-    write_ssp,
-)
+from altfusion.cosim import simulate, write_ssp  # noqa: E402
 from altfusion.cosim.runner import MASTERS  # noqa: E402
 from altfusion.interop.compliance import fmu_problems, ssp_problems  # noqa: E402
 from altfusion.interop.container import (  # noqa: E402
@@ -57,6 +51,7 @@ from altfusion.physics.profiles import make_profile  # noqa: E402
 from altfusion.sensors.air_data import AirDataParams  # noqa: E402
 from altfusion.systems import SYSTEMS, build_system  # noqa: E402
 from altfusion.systems.plant import plant_components, plant_connections  # noqa: E402
+from altfusion.systems.spec import ComponentSpec, Connection, SystemSpec  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 MODELS = ROOT / "models"

@@ -15,13 +15,14 @@ import matplotlib.image
 import numpy as np
 import pytest
 
-from altfusion.cosim import ComponentSpec, Connection, Metric, SystemSpec, write_ssp
+from altfusion.cosim import write_ssp
 from altfusion.montecarlo.aggregation import aggregate
 from altfusion.montecarlo.execution import CampaignSettings, Execution, run_campaign
 from altfusion.montecarlo.source import CampaignError, SystemSource
 from altfusion.montecarlo.storage import finished_runs, read_manifest, read_run, run_path
 from altfusion.montecarlo.tables import statistics_json
 from altfusion.systems.plant import plant_components, plant_connections
+from altfusion.systems.spec import ComponentSpec, Connection, Metric, SystemSpec
 
 RUNS = 8
 STEP = 0.02

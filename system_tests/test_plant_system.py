@@ -11,17 +11,10 @@ from fmpy.ssp.ssd import read_ssd
 from fmpy.validation import validate_fmu
 from state_restore import assert_restores_identically
 
-from altfusion.cosim import (
-    ComponentSpec,
-    Connection,
-    CosimError,
-    Simulation,
-    SystemSpec,
-    read_ssp,
-    simulate,
-)
+from altfusion.cosim import CosimError, Simulation, read_ssp, simulate
 from altfusion.cosim.instances import FmuInstance, fmu_info
 from altfusion.systems import SYSTEMS, build_system
+from altfusion.systems.spec import ComponentSpec, Connection, SystemSpec
 
 
 def test_every_fmu_passes_fmpy_validate(fmus):

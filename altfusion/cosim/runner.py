@@ -37,8 +37,8 @@ from altfusion.cosim.instances import (
     fmu_info,
 )
 from altfusion.cosim.results import Results
-from altfusion.cosim.system import SystemSpec
 from altfusion.errors import ParameterError
+from altfusion.systems.spec import SystemSpec
 from altfusion.timegrid import TickClock
 
 __all__ = ["MASTERS", "CosimError", "Simulation", "simulate"]

@@ -25,7 +25,6 @@ episode at 150 s) flies the whole flight, as does the nominal flight.
 from dataclasses import replace
 from pathlib import Path
 
-from altfusion.cosim.system import ComponentSpec
 from altfusion.evaluation.metrics import Fault
 from altfusion.evaluation.scenarios import (
     EstimatorInfo,
@@ -43,6 +42,7 @@ from altfusion.systems.faults import (
     fault_flight,
     with_fault,
 )
+from altfusion.systems.spec import ComponentSpec
 
 AFTER_TRANSIENT = 60.0
 """Seconds flown after the transient of a fault that starts in flight."""

@@ -40,13 +40,13 @@ from pathlib import Path
 from typing import Any
 
 from altfusion.cosim.instances import fmu_info
-from altfusion.cosim.system import ComponentSpec, Metric, SystemSpec
 from altfusion.estimators.base import HEIGHT_SOURCES, Estimator
 from altfusion.evaluation.metrics import Fault
 from altfusion.montecarlo.source import CampaignError
 from altfusion.systems.catalog import build_system
 from altfusion.systems.error_models import SENSOR_ERRORS
 from altfusion.systems.sensors import SENSORS
+from altfusion.systems.spec import ComponentSpec, Metric, SystemSpec
 from altfusion.systems.wiring import EXTRA_SOURCES, SENSOR_OF_PREFIX, estimator_connections
 
 PAPER_ESTIMATOR = "estimator"

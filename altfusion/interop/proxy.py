@@ -19,7 +19,6 @@ import zipfile
 from pathlib import Path
 
 from altfusion.cosim.results import Results
-from altfusion.cosim.system import SystemSpec
 from altfusion.interop.engines import (
     SSP_PARAMETER_SET,
     EngineError,
@@ -28,6 +27,7 @@ from altfusion.interop.engines import (
     reject_bad_parameters,
 )
 from altfusion.interop.native import environment_lib
+from altfusion.systems.spec import SystemSpec
 
 
 def libpython() -> Path:

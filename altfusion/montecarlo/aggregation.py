@@ -22,7 +22,6 @@ from pathlib import Path
 
 import numpy as np
 
-from altfusion.cosim.system import Metric
 from altfusion.montecarlo.source import CampaignError
 from altfusion.montecarlo.statistics import (
     Interval,
@@ -38,6 +37,7 @@ from altfusion.montecarlo.storage import (
     load_run,
     read_manifest,
 )
+from altfusion.systems.spec import Metric
 
 CONFIDENCE = 0.95
 

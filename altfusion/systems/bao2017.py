@@ -38,11 +38,11 @@ corrected baro sample plus the drift, so at the recorded whole seconds, where bo
 sample, the errors have the same distribution; the 10 Hz run costs 1.6 times as much.
 """
 
-from altfusion.cosim.system import ComponentSpec, Metric, SystemSpec
 from altfusion.estimators.bao import BaoDriftEstimator
 from altfusion.sensors.air_data import SECONDS_PER_HOUR
 from altfusion.systems.plant import plant_components, plant_connections
 from altfusion.systems.sensors import sensor_components, sensor_connections
+from altfusion.systems.spec import ComponentSpec, Metric, SystemSpec
 from altfusion.systems.wiring import estimator_connections
 
 BASE_STEP = 0.2

@@ -3,14 +3,14 @@
 from collections.abc import Callable
 from dataclasses import replace
 
-from altfusion.cosim.system import Metric, SystemSpec
-from altfusion.replay.system import LOGS, catalog_replay
 from altfusion.systems.bao2017 import bao2017
 from altfusion.systems.fault_demo import fault_demo_altitude_ekf, fault_demo_yang
 from altfusion.systems.faults import fault_flight, with_fault
 from altfusion.systems.hajiyev import hajiyev, hajiyev_drift
 from altfusion.systems.plant import plant_components, plant_connections
+from altfusion.systems.replay import LOGS, catalog_replay
 from altfusion.systems.sensors import SEED_003_SENSORS, sensor_components, sensor_connections
+from altfusion.systems.spec import Metric, SystemSpec
 from altfusion.systems.whang2008 import whang2008, whang2008_baseline
 from altfusion.systems.xu2016 import (
     xu2016_hover15,

@@ -15,10 +15,10 @@ run of a campaign gives both systems the same weather and sensor noise.
 
 from dataclasses import replace
 
-from altfusion.cosim.system import SystemSpec
 from altfusion.estimators.altitude_ekf import AltitudeEKF
 from altfusion.estimators.yang import YangFusionKF
 from altfusion.systems.faults import FAULT_COMPONENT, with_fault
+from altfusion.systems.spec import SystemSpec
 from altfusion.systems.yang2020 import ALTITUDE_EKF_NOISES, closed_loop
 
 ACC_BIAS = 0.2

@@ -17,15 +17,15 @@ generic flight every estimator is tested on side by side.
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-from altfusion.cosim.system import ComponentSpec, Connection, Metric, SystemSpec
 from altfusion.estimators.baseline import BaselineKFParams
+from altfusion.estimators.registry import ESTIMATOR_CLASSES
 from altfusion.estimators.whang import WhangParams
 from altfusion.estimators.yang import YangParams
-from altfusion.replay.system import CATALOG_ESTIMATORS
 from altfusion.sensors.faults import PASSED_SIGNALS, STREAMS
 from altfusion.systems.error_models import FLAT_TERRAIN
 from altfusion.systems.plant import plant_components, plant_connections
 from altfusion.systems.sensors import SEED_003_SENSORS, sensor_components, sensor_connections
+from altfusion.systems.spec import ComponentSpec, Connection, Metric, SystemSpec
 from altfusion.systems.wiring import estimator_connections
 
 FAULT_COMPONENT = "fault"
@@ -254,24 +254,24 @@ ESTIMATOR_RECORD = ("h_est", "vz_est", "h_std", "h_valid", "status", "n_height_r
 def estimator_record(fmu: str) -> tuple[str, ...]:
     """What :func:`fault_flight` records of estimator ``fmu``: estimate, health, test
     ratios."""
-    core = CATALOG_ESTIMATORS[fmu]
+    core = ESTIMATOR_CLASSES[fmu]
     ratios = tuple(f"{source}_test_ratio" for source in core.sources())
     return tuple(f"{fmu}.{name}" for name in (*ESTIMATOR_RECORD, *ratios))
 
 
-def fault_flight(estimators: tuple[str, ...] = tuple(CATALOG_ESTIMATORS)) -> SystemSpec:
+def fault_flight(estimators: tuple[str, ...] = tuple(ESTIMATOR_CLASSES)) -> SystemSpec:
     """The fault suite's generic flight (module docstring) with ``estimators`` (FMU model
     names) side by side, each a component named after its FMU."""
-    unknown = [name for name in estimators if name not in CATALOG_ESTIMATORS]
+    unknown = [name for name in estimators if name not in ESTIMATOR_CLASSES]
     if unknown:
-        raise ValueError(f"unknown estimators {unknown}; known: {list(CATALOG_ESTIMATORS)}")
+        raise ValueError(f"unknown estimators {unknown}; known: {list(ESTIMATOR_CLASSES)}")
     components = (
         plant_components("fault_flight", step=BASE_STEP)
         + sensor_components(step=BASE_STEP, parameters=SENSORS, steps=SENSOR_STEPS)
         + tuple(ComponentSpec(name, name, BASE_STEP, dict(TRUE_NOISE.get(name, {})))
                 for name in estimators))
     connections = (plant_connections() + sensor_connections()
-                   + sum((estimator_connections(CATALOG_ESTIMATORS[name], name)
+                   + sum((estimator_connections(ESTIMATOR_CLASSES[name], name)
                           for name in estimators), ()))
     return SystemSpec(
         name="fault_flight",

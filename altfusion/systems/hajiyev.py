@@ -40,10 +40,10 @@ Steps: the plant, atmosphere and controller at 0.05 s (the loop tracks the profi
 recorded every 1 s.
 """
 
-from altfusion.cosim.system import ComponentSpec, Connection, Metric, SystemSpec
 from altfusion.estimators.hajiyev import HajiyevAdaptiveEstimator
 from altfusion.systems.plant import plant_components, plant_connections
 from altfusion.systems.sensors import sensor_components, sensor_connections
+from altfusion.systems.spec import ComponentSpec, Connection, Metric, SystemSpec
 from altfusion.systems.wiring import estimator_connections
 
 BASE_STEP = 0.05

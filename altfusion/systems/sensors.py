@@ -10,7 +10,7 @@ sensor outputs named in ``docs/signals.md``.
 from dataclasses import dataclass
 from typing import Any
 
-from altfusion.cosim.system import ComponentSpec, Connection
+from altfusion.systems.spec import ComponentSpec, Connection
 
 
 @dataclass(frozen=True)

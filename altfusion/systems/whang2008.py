@@ -27,11 +27,11 @@ exactly); each sensor and the estimator at its own period. Signals are recorded 
 at the GPS samples (whole seconds) and in between, where the GPS output holds.
 """
 
-from altfusion.cosim.system import ComponentSpec, Metric, SystemSpec
 from altfusion.estimators.baseline import BaselineKF
 from altfusion.estimators.whang import WhangGAEstimator, WhangParams
 from altfusion.systems.plant import plant_components, plant_connections
 from altfusion.systems.sensors import sensor_components, sensor_connections
+from altfusion.systems.spec import ComponentSpec, Metric, SystemSpec
 from altfusion.systems.wiring import estimator_connections
 
 BASE_STEP = 0.05

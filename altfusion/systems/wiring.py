@@ -8,8 +8,8 @@ inputs are those the estimator's core class declares (the FMU declares the same;
 ``system_tests/test_replay.py`` checks them against the built FMUs).
 """
 
-from altfusion.cosim.system import Connection
 from altfusion.estimators.base import Estimator
+from altfusion.systems.spec import Connection
 
 SENSOR_OF_PREFIX = {"baro": "air_data", "gps": "gnss", "acc": "accelerometer",
                     "radar": "radar", "laser": "laser"}

@@ -46,11 +46,11 @@ barometer and BaselineKF at 0.02 s; the GPS at 0.2 s. Signals are recorded every
 
 from dataclasses import replace
 
-from altfusion.cosim.system import ComponentSpec, Metric, SystemSpec
 from altfusion.estimators.baseline import BaselineKF
 from altfusion.estimators.xu import XuSHAEKF
 from altfusion.systems.plant import plant_components, plant_connections
 from altfusion.systems.sensors import sensor_components, sensor_connections
+from altfusion.systems.spec import ComponentSpec, Metric, SystemSpec
 from altfusion.systems.wiring import estimator_connections
 
 BASE_STEP = 0.01

@@ -18,13 +18,13 @@ sensor, seed 003's noises); the same run of a campaign gives these systems ident
 sensor noise.
 """
 
-from altfusion.cosim.system import ComponentSpec, Metric, SystemSpec
 from altfusion.estimators.altitude_ekf import AltitudeEKF
 from altfusion.estimators.baseline import BaselineKF
 from altfusion.estimators.yang import YangFusionKF
 from altfusion.systems.error_models import SENSOR_ERRORS
 from altfusion.systems.plant import plant_components, plant_connections
 from altfusion.systems.sensors import SEED_003_SENSORS, sensor_components, sensor_connections
+from altfusion.systems.spec import ComponentSpec, Metric, SystemSpec
 from altfusion.systems.wiring import estimator_connections
 
 BASE_STEP = 0.01
