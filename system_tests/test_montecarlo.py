@@ -30,7 +30,7 @@ WEATHER = {"wind_mean": 3.0, "gust_std": 1.5, "lapse_rate_std": 0.003, "lapse_ra
 
 
 def gusty_system(estimator: bool = False) -> SystemSpec:
-    """30 s of seed 003's climb in a gusty atmosphere whose lapse rate changes every 5 s,
+    """30 s of yang2020's climb in a gusty atmosphere whose lapse rate changes every 5 s,
     against a calm reference atmosphere: both error metrics differ from run to run. With
     ``estimator``, a third atmosphere named 'estimator' rides along (to be swapped)."""
     components = plant_components("yang2020", step=STEP, atmosphere=WEATHER) + (

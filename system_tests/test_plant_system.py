@@ -36,7 +36,7 @@ def yang_run(fmus):
 
 
 def test_seed_003_profile_is_flown(yang_run):
-    """Seed 003 Section 4.1: climb rate peaks at 12 m/s, ±0.2 m/s² phases at their times."""
+    """yang2020 Section 4.1: climb rate peaks at 12 m/s, ±0.2 m/s² phases at their times."""
     r, t = yang_run, yang_run.time
     assert r["plant.vz"].max() == pytest.approx(12.0, abs=1e-3)
     assert r["plant.vz"].min() == pytest.approx(-12.0, abs=1e-3)

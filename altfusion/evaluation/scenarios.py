@@ -70,7 +70,7 @@ SOURCE_OF_SENSOR = {sensor: prefix for prefix, sensor in SENSOR_OF_PREFIX.items(
 """Signal prefix (source) of each sensor component."""
 
 REQUIRED_SOURCES: dict[str, dict[str, str]] = {
-    "XuSHAEKF": {"acc": "its process model is driven by the accelerometer (seed 004 eqs. "
+    "XuSHAEKF": {"acc": "its process model is driven by the accelerometer (xu2016 eqs. "
                         "10-11, 19: acc_z is the input u)"},
 }
 """Sources an estimator's algorithm cannot do without, and why; an estimator core class may

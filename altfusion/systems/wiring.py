@@ -17,7 +17,7 @@ SENSOR_OF_PREFIX = {"baro": "air_data", "gps": "gnss", "acc": "accelerometer",
 
 EXTRA_SOURCES = {"wind_speed": "atmosphere.wind_speed"}
 """Sources of the estimator inputs that are no sensor output (``extra_inputs``): the wind
-speed of seed 001's wind correction (eq. 11), the wind the air-data module feels."""
+speed of bao2017's wind correction (eq. 11), the wind the air-data module feels."""
 
 
 def estimator_connections(estimator: type[Estimator], component: str = "estimator",
