@@ -13,9 +13,9 @@ from altfusion.cosim.runner import RunFailedError, Simulation
 from altfusion.cosim.settings import parse_settings
 from altfusion.cosim.ssp import LoadedSystem, read_ssp
 from altfusion.errors import ParameterError, UsageError
+from altfusion.estimators.registry import ESTIMATOR_CLASSES
+from altfusion.evaluation.command import add_command as add_evaluate_command
 from altfusion.montecarlo.commands import add_commands as add_montecarlo_commands
-from altfusion.montecarlo.evaluate_command import add_command as add_evaluate_command
-from altfusion.replay.system import CATALOG_ESTIMATORS
 
 INCOMPLETE = ".incomplete"
 """Suffix before '.csv'/'.png' of the results of a run that failed part way."""
@@ -158,7 +158,7 @@ def build_parser() -> argparse.ArgumentParser:
     replay = commands.add_parser(
         "replay", help="run estimators on a PX4 flight log (ULog), compare with PX4 EKF2")
     replay.add_argument("log", type=Path, help="PX4 ULog file (.ulg)")
-    replay.add_argument("--estimators", default=",".join(CATALOG_ESTIMATORS),
+    replay.add_argument("--estimators", default=",".join(ESTIMATOR_CLASSES),
                         help="comma-separated estimator FMU names (default: %(default)s)")
     replay.add_argument("--models", default="models", help="folder of the built FMUs")
     replay.add_argument("--out", default="results", help="output folder (default: results)")

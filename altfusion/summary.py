@@ -3,7 +3,7 @@
 import numpy as np
 
 from altfusion.cosim.results import Results
-from altfusion.cosim.system import Metric
+from altfusion.systems.spec import Metric
 
 
 def metric_rows(results: Results, metrics: tuple[Metric, ...]) -> list[tuple[str, float, ...]]:

@@ -5,7 +5,7 @@ from altfusion.estimators import bao
 
 
 class BaoDriftEstimator(fmi.CoreSlave):
-    """Bao et al.'s barometer error correction (seed 001): principle-error and wind
+    """Bao et al.'s barometer error correction (bao2017): principle-error and wind
     corrections, and a drift Kalman filter whose R adapts to the GPS VDOP and satellite count;
     no vertical-speed estimate (vz_est = 0)."""
 

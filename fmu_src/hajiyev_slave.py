@@ -6,7 +6,7 @@ from altfusion.estimators import hajiyev
 
 class HajiyevAdaptiveEstimator(fmi.CoreSlave):
     """Maximum-likelihood baro/GPS fusion with the adaptive filter-gain correction of
-    Hajiyev et al. (seed 002); no vertical-speed estimate (vz_est = 0)."""
+    Hajiyev et al. (hajiyev); no vertical-speed estimate (vz_est = 0)."""
 
     core_class = hajiyev.HajiyevAdaptiveEstimator
     variables = fmi.estimator_variables(core_class.streams, (

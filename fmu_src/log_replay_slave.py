@@ -25,4 +25,4 @@ class LogReplay(fmi.CoreSlave):
     core_class = component.LogReplay
     bundled_files = ("tests/data/flightlogs",)
     variables = tuple(fmi.contract_output(name, reads_at_step_end=(), description=SOURCES.get(name))
-                      for name in component.OUTPUT_NAMES)
+                      for name in component.LOG_OUTPUTS)

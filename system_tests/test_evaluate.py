@@ -119,7 +119,7 @@ def test_an_unknown_estimator_or_scenario_is_refused_naming_the_known_ones(fmus,
 
 
 def test_fault_scenarios_put_the_fault_between_sensors_and_every_estimator(fmus):
-    from altfusion.montecarlo.evaluate_run import plan_evaluation
+    from altfusion.evaluation.run import plan_evaluation
 
     scenarios, estimators, _ = plan_evaluation(MODELS, None, ["baro_step", "range_terrain"])
     by_name = {s.name: s for s in scenarios}

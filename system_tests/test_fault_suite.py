@@ -31,11 +31,11 @@ import pytest
 
 from altfusion import scores
 from altfusion.cosim.runner import RunFailedError, Simulation
+from altfusion.estimators.registry import ESTIMATOR_CLASSES
 from altfusion.montecarlo.seeds import run_seeds, seeded_components
-from altfusion.replay.system import CATALOG_ESTIMATORS
 from altfusion.systems.faults import FAULTS, fault_flight, run_parameters, with_fault
 
-ESTIMATORS = tuple(CATALOG_ESTIMATORS)
+ESTIMATORS = tuple(ESTIMATOR_CLASSES)
 ISOLATION_DEADLINE = 10.0
 AIDING_TIMEOUT = 5.0
 RECORD_INTERVAL = 0.1
@@ -109,7 +109,7 @@ def test_run_completes_and_every_estimator_output_is_finite(suite, fault):
 @pytest.mark.parametrize("fault", [name for name, f in FAULTS.items() if f.faulty])
 def test_faulty_source_is_isolated_within_10_s(suite, request, fault, estimator):
     scenario = FAULTS[fault]
-    sources = [s for s in scenario.faulty if s in CATALOG_ESTIMATORS[estimator].sources()]
+    sources = [s for s in scenario.faulty if s in ESTIMATOR_CLASSES[estimator].sources()]
     if not sources:
         pytest.skip(f"{estimator} does not read {scenario.faulty}")
     known(request, "isolation", fault, estimator)

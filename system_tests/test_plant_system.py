@@ -11,17 +11,10 @@ from fmpy.ssp.ssd import read_ssd
 from fmpy.validation import validate_fmu
 from state_restore import assert_restores_identically
 
-from altfusion.cosim import (
-    ComponentSpec,
-    Connection,
-    CosimError,
-    Simulation,
-    SystemSpec,
-    read_ssp,
-    simulate,
-)
+from altfusion.cosim import CosimError, Simulation, read_ssp, simulate
 from altfusion.cosim.instances import FmuInstance, fmu_info
 from altfusion.systems import SYSTEMS, build_system
+from altfusion.systems.spec import ComponentSpec, Connection, SystemSpec
 
 
 def test_every_fmu_passes_fmpy_validate(fmus):
@@ -43,7 +36,7 @@ def yang_run(fmus):
 
 
 def test_seed_003_profile_is_flown(yang_run):
-    """Seed 003 Section 4.1: climb rate peaks at 12 m/s, ±0.2 m/s² phases at their times."""
+    """yang2020 Section 4.1: climb rate peaks at 12 m/s, ±0.2 m/s² phases at their times."""
     r, t = yang_run, yang_run.time
     assert r["plant.vz"].max() == pytest.approx(12.0, abs=1e-3)
     assert r["plant.vz"].min() == pytest.approx(-12.0, abs=1e-3)

@@ -13,20 +13,21 @@ from altfusion.cli import main
 from altfusion.cosim import CosimError, read_ssp
 from altfusion.cosim.results import Results
 from altfusion.cosim.runner import Simulation
+from altfusion.estimators.registry import ESTIMATOR_CLASSES
 from altfusion.replay.compare import (
     compare_all,
     format_table,
     new_sample_rows,
     settle_time,
 )
-from altfusion.replay.component import OUTPUT_NAMES
 from altfusion.replay.run import declared_inputs
-from altfusion.replay.system import CATALOG_ESTIMATORS, LOGS, REPLAY
+from altfusion.signals import LOG_OUTPUTS
+from altfusion.systems.replay import LOGS, REPLAY
 
 ROOT = Path(__file__).resolve().parents[1]
 MODELS = ROOT / "models"
 LOG_DIR = ROOT / "tests" / "data" / "flightlogs"
-ESTIMATORS = tuple(CATALOG_ESTIMATORS)
+ESTIMATORS = tuple(ESTIMATOR_CLASSES)
 TOPICS = {"baro": "vehicle_air_data", "gps": "vehicle_gps_position", "acc": "sensor_combined",
           "laser": "distance_sensor", "ekf": "vehicle_local_position"}
 
@@ -69,7 +70,7 @@ def test_catalog_replay_systems_connect_exactly_the_inputs_each_fmu_declares(ssp
         for estimator in ESTIMATORS:
             connected = {c.end.split(".", 1)[1] for c in spec.connections
                          if c.end.startswith(f"{estimator}.")}
-            provided = set(declared_inputs(fmus[estimator])) & set(OUTPUT_NAMES)
+            provided = set(declared_inputs(fmus[estimator])) & set(LOG_OUTPUTS)
             assert connected == provided, (name, estimator)
 
 
@@ -179,7 +180,8 @@ def test_altfusion_replay_refuses_a_missing_log_or_an_unknown_estimator(fmus, tm
 
 
 def test_a_log_file_that_is_not_there_fails_initialization_naming_log_file(fmus):
-    from altfusion.cosim import ComponentSpec, SystemSpec, simulate
+    from altfusion.cosim import simulate
+    from altfusion.systems.spec import ComponentSpec, SystemSpec
 
     system = SystemSpec("bad_log", "LogReplay of a missing file",
                         (ComponentSpec(REPLAY, "LogReplay", 0.01,

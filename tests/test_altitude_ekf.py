@@ -262,7 +262,7 @@ def test_rangefinder_switches_with_hysteresis_and_resets_on_a_terrain_step():
 
 
 def test_gnss_noise_scales_with_vdop_and_satellites():
-    """σ_G = gps_noise·(VDOP/gps_vdop_ref)·√max(1, N_ref/N) (seed 001)."""
+    """σ_G = gps_noise·(VDOP/gps_vdop_ref)·√max(1, N_ref/N) (bao2017)."""
     ekf = AltitudeEKF(AltitudeEKF.Params(gps_noise=2.0, gps_nsat_ref=6))
     assert ekf._gps_sigma({"gps_vdop": 1.5, "gps_nsat": 9}) == pytest.approx(3.0)
     assert ekf._gps_sigma({"gps_vdop": 4.0, "gps_nsat": 5}) == pytest.approx(
@@ -274,7 +274,7 @@ def test_gnss_noise_scales_with_vdop_and_satellites():
 
 def test_without_an_accelerometer_the_motion_model_estimates_the_acceleration():
     """No accelerometer: b_a carries minus the vehicle's acceleration (white jerk of
-    ``jerk_psd``), so a steady deceleration (a descent levelling off, seed 002) is tracked
+    ``jerk_psd``), so a steady deceleration (a descent levelling off, hajiyev) is tracked
     without lag. 0.05 m/s² for 200 s, baro σ 0.5 m every step and GNSS speed σ 0.1 m/s at
     10 Hz: the acceleration estimate lies within 3 of its own σ of the truth (0.27 % of
     Gaussian errors beyond), that σ below its prior's (it is observed), the mean speed error
@@ -406,7 +406,7 @@ def test_ground_effect_dead_zone_ignores_negative_baro_innovations_near_the_grou
 
 
 def test_noise_adaptation_is_bounded_and_weights_a_noisy_source_down():
-    """Seed 004's adaptation (adaptive_noise), gates off as in seed 004: a baro 10x
+    """xu2016's adaptation (adaptive_noise), gates off as in xu2016: a baro 10x
     noisier than its nominal 0.5 m, the only height source, is weighted down (the height
     error is smaller than without adaptation) and the factor on R never exceeds
     adaptive_max."""

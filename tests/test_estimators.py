@@ -94,8 +94,8 @@ def test_invalid_parameters_are_rejected_by_name(cls, params, name):
 
 
 def hajiyev_run(adaptive: bool, drift: bool, seed: int) -> np.ndarray:
-    """Seed 002 Section 5 with the paper's own measurement simulation (eqs. 32-33): the baro
-    altitude from eq. (1) with p0(k-1), T0(k-1) drifting from k = 23 (NOTES.md)."""
+    """hajiyev Section 5 with the paper's own measurement simulation (eqs. 32-33): the baro
+    altitude from eq. (1) with p0(k-1), T0(k-1) drifting from k = 23 (docs/papers.md)."""
     rng = np.random.default_rng(seed)
     profile = make_profile("hajiyev")
     estimator = HajiyevAdaptiveEstimator(HajiyevParams(adaptive=adaptive), step_size=1.0)
@@ -180,7 +180,7 @@ def test_gps_before_the_first_baro_sample_is_not_fused(cls):
 
 
 def whang_runs(paper_sign: bool, runs: int = 6):
-    """Seed 000 Section 3 on synthetic air data: our atmosphere with a random lapse-rate change
+    """whang2008 Section 3 on synthetic air data: our atmosphere with a random lapse-rate change
     every 10 s (σ 0.003 K/m), baro from eq. (1) + 5 m noise, ADM temperature + 1.5 K, GPS 70 m."""
     errors = {"baro": [], "comp": [], "final": [], "gps": []}
     for run in range(runs):
@@ -207,7 +207,7 @@ def whang_runs(paper_sign: bool, runs: int = 6):
 
 
 def test_whang_final_height_beats_gps_and_compensated_height():
-    """Seed 000's claim: the final height's error is below the GPS's. The 50-run reproduction
+    """whang2008's claim: the final height's error is below the GPS's. The 50-run reproduction
     gives 41.6 / 69.8 m = 0.60 with an interval of ±1.3 %; 6 runs scatter √(50/6) = 2.9 times
     more (±3.8 %), so 0.7 leaves a margin of over 4 of those intervals."""
     rms = whang_runs(paper_sign=False)

@@ -14,7 +14,7 @@ from altfusion.estimators.hajiyev import HajiyevAdaptiveEstimator
 from altfusion.estimators.whang import WhangGAEstimator
 from altfusion.estimators.xu import XuSHAEKF
 from altfusion.estimators.yang import YangFusionKF
-from altfusion.montecarlo.evaluate_metrics import (
+from altfusion.evaluation.metrics import (
     RECOVERY_WINDOW,
     Fault,
     Series,
@@ -28,7 +28,7 @@ from altfusion.montecarlo.evaluate_metrics import (
     trailing_rms,
     valid_fraction,
 )
-from altfusion.montecarlo.evaluate_scenarios import (
+from altfusion.evaluation.scenarios import (
     NOISE_NAMES,
     PAPER_SCENARIOS,
     EstimatorInfo,

@@ -22,6 +22,7 @@ checked against (``altfusion.interop``): a feedthrough signal then arrives one b
 """
 
 import graphlib
+import math
 from dataclasses import dataclass, field
 from operator import getitem
 from pathlib import Path
@@ -37,8 +38,8 @@ from altfusion.cosim.instances import (
     fmu_info,
 )
 from altfusion.cosim.results import Results
-from altfusion.cosim.system import SystemSpec
 from altfusion.errors import ParameterError
+from altfusion.systems.spec import SystemSpec
 from altfusion.timegrid import TickClock
 
 __all__ = ["MASTERS", "CosimError", "Simulation", "simulate"]
@@ -91,9 +92,11 @@ class _Stepped:
         self._latch_sources = [link.source.source(link) for _, _, link in self.delayed]
         self._latched = [None] * len(self.delayed)
         inputs: dict[tuple[str, int], list[tuple[int, tuple[Any, int]]]] = {}
+        latched_groups: set[tuple[str, int]] = set()
         for position, (kind, vr, link) in enumerate(self.delayed):
             inputs.setdefault((kind, link.source.ratio), []).append(
                 (vr, (self._latched, position)))
+            latched_groups.add((kind, link.source.ratio))
         for kind, vr, link in self.feedthrough:
             inputs.setdefault((kind, link.source.ratio), []).append(
                 (vr, link.source.source(link)))
@@ -101,7 +104,24 @@ class _Stepped:
                           tuple(buffer for _, (buffer, _slot) in entries),
                           tuple(slot for _, (_buffer, slot) in entries))
                          for (kind, _ratio), entries in inputs.items()]
+        self._writer_phases = self._phases([None if key in latched_groups else key[1]
+                                            for key in inputs])
         self.step = self.instance.stepper()
+
+    def _phases(self, source_ratios: list[int | None]) -> tuple[tuple[int, ...], ...]:
+        """The writers worth checking at each of this component's steps, by phase
+        ``(end // ratio) % len(phases)`` of the base tick ``end`` the step ends at.
+
+        A writer fed straight by sources of ratio r (feedthrough) can only see new values if
+        a source stepped since this component last set its inputs, in the base ticks
+        (end - ratio, end]; otherwise its values are those already written, and comparing
+        them again is skipped. A writer with latched inputs (None) is checked at every step.
+        """
+        period = math.lcm(self.ratio, *(r for r in source_ratios if r is not None))
+        return tuple(
+            tuple(index for index, r in enumerate(source_ratios)
+                  if r is None or end // r != (end - self.ratio) // r)
+            for end in range(0, period, self.ratio))
 
     def source(self, link: _Link) -> tuple[Any, int]:
         """The (buffer, slot) holding the output a link reads."""
@@ -123,7 +143,8 @@ class _Stepped:
     def apply_inputs(self) -> None:
         """Set the inputs, one call per writer; a writer whose values are all unchanged since
         the last call is not called again (an FMU keeps its inputs: fmi2Set* is only needed
-        for a change, and sample-held sensor signals change at their own rate)."""
+        for a change, and sample-held sensor signals change at their own rate). The stepping
+        loop does the same inline, checking only the writers of :meth:`_phases`."""
         written = self._written
         for index, (write, buffers, slots) in enumerate(self._writers):
             values = list(map(getitem, buffers, slots))
@@ -313,11 +334,17 @@ class Simulation:
         return self._results(times, data)
 
     def _loop(self, steps: int, every: int, data: np.ndarray, times: np.ndarray) -> None:
-        """The stepping loop of :meth:`run`, recording every ``every`` base steps."""
+        """The stepping loop of :meth:`run`, recording every ``every`` base steps.
+
+        The same as, for each base tick: latch the delayed inputs of the components starting
+        a step, then, upstream first, for each component ending a step at tick ``end``:
+        :meth:`_Stepped.apply_inputs`, ``step``, :meth:`_Stepped.refresh_outputs`; with the
+        calls inlined and only the writers whose sources may have changed compared."""
         tick_time = self.base.time
         t_previous = tick_time(0)
         latching = [(c.ratio, c.latch) for c in self._components if c.delayed]
-        stepping = [(c.ratio, c.apply_inputs, c.step, c._linked_reads) for c in self._order]
+        stepping = [(c.ratio, c._writer_phases, len(c._writer_phases), c._writers, c._written,
+                     c.step, c._linked_reads) for c in self._order]
         recorded_only = [c.refresh_recorded for c in self._components if c._recorded_reads]
         for n in range(steps):
             for ratio, latch in latching:
@@ -325,10 +352,15 @@ class Simulation:
                     latch()
             end = n + 1
             t_end = tick_time(end)
-            for ratio, apply_inputs, step, linked_reads in stepping:
+            for ratio, phases, period, writers, written, step, linked_reads in stepping:
                 if end % ratio:
                     continue
-                apply_inputs()
+                for index in phases[end // ratio % period]:       # apply_inputs(), inlined
+                    write, buffers, slots = writers[index]
+                    values = list(map(getitem, buffers, slots))
+                    if values != written[index]:
+                        write(values)
+                        written[index] = values
                 t_start = t_previous if ratio == 1 else tick_time(end - ratio)
                 step(t_start, t_end - t_start)
                 for read in linked_reads:               # refresh_outputs(), inlined

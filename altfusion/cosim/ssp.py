@@ -31,8 +31,8 @@ from fmpy import read_model_description
 from fmpy.ssp.ssd import read_ssd
 from lxml import etree
 
-from altfusion.cosim.system import ComponentSpec, Connection, Metric, SystemSpec
 from altfusion.errors import UsageError
+from altfusion.systems.spec import ComponentSpec, Connection, Metric, SystemSpec
 from altfusion.units import BASE_UNITS
 from altfusion.version import CORE_VERSION
 

@@ -43,7 +43,7 @@ from altfusion.cosim.instances import (
 from altfusion.cosim.results import Results
 from altfusion.cosim.runner import simulate
 from altfusion.cosim.ssp import OSP_SSD, read_ssp
-from altfusion.cosim.system import SystemSpec
+from altfusion.systems.spec import SystemSpec
 from altfusion.timegrid import TickClock
 
 ENGINES = ("altfusion", "altfusion-jacobi", "libcosim", "libcosim-osp", "ecos", "ecos-proxy")

@@ -20,7 +20,6 @@ from pathlib import Path
 
 from altfusion.cosim.results import Results
 from altfusion.cosim.ssp import OSP_SSD
-from altfusion.cosim.system import SystemSpec
 from altfusion.interop.engines import (
     SSP_PARAMETER_SET,
     EngineError,
@@ -29,6 +28,7 @@ from altfusion.interop.engines import (
     reject_bad_parameters,
 )
 from altfusion.interop.native import environment_lib
+from altfusion.systems.spec import SystemSpec
 
 
 def libpython() -> Path:

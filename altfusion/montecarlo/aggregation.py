@@ -5,7 +5,7 @@ runs).
 For each error metric (estimate - truth, ``Metric`` of the system), with confidence level
 ``CONFIDENCE``:
 
-* versus time (like seed 000, Fig. 3): the RMS over runs at each output sample, with the
+* versus time (like whang2008, Fig. 3): the RMS over runs at each output sample, with the
   chi-square interval of a zero-mean Gaussian error's σ, and the mean error with its t
   interval;
 * overall, treating each run as one independent sample (samples within a run are
@@ -22,7 +22,6 @@ from pathlib import Path
 
 import numpy as np
 
-from altfusion.cosim.system import Metric
 from altfusion.montecarlo.source import CampaignError
 from altfusion.montecarlo.statistics import (
     Interval,
@@ -38,6 +37,7 @@ from altfusion.montecarlo.storage import (
     load_run,
     read_manifest,
 )
+from altfusion.systems.spec import Metric
 
 CONFIDENCE = 0.95
 

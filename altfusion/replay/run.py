@@ -3,7 +3,7 @@
 This is co-simulation-level code (it steps FMUs through fmpy); the FMUs themselves never
 import it. Each estimator gets the inputs its FMU declares (read from its modelDescription),
 each connected to the LogReplay output of the same name, and the replay tuning of
-:mod:`altfusion.replay.system` unless ``paper_tuning``.
+:mod:`altfusion.systems.replay` unless ``paper_tuning``.
 """
 
 import math
@@ -14,19 +14,14 @@ from typing import Any
 from altfusion.cosim.instances import CosimError, fmu_info
 from altfusion.cosim.results import Results
 from altfusion.cosim.runner import Simulation
-from altfusion.cosim.system import SystemSpec
 from altfusion.errors import UsageError
+from altfusion.replay.calibration import launch_calibration
 from altfusion.replay.compare import EstimatorReport, compare_all, settle_time
 from altfusion.replay.extract import FlightLog
 from altfusion.replay.plot import plot_replay
-from altfusion.replay.system import (
-    BASE_STEP,
-    EstimatorEntry,
-    launch_calibration,
-    replay_system,
-    replay_tuning,
-)
 from altfusion.replay.ulog import read_ulog
+from altfusion.systems.replay import BASE_STEP, EstimatorEntry, replay_system, replay_tuning
+from altfusion.systems.spec import SystemSpec
 
 
 @dataclass

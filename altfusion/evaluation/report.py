@@ -16,9 +16,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from altfusion.atomic import write_text  # noqa: E402
-from altfusion.montecarlo.evaluate_metrics import Summary  # noqa: E402
-from altfusion.montecarlo.evaluate_run import METRICS, Cell  # noqa: E402
-from altfusion.montecarlo.evaluate_scenarios import Scenario  # noqa: E402
+from altfusion.evaluation.metrics import Summary  # noqa: E402
+from altfusion.evaluation.run import METRICS, Cell  # noqa: E402
+from altfusion.evaluation.scenarios import Scenario  # noqa: E402
 from altfusion.montecarlo.report import STYLE, esc  # noqa: E402
 from altfusion.scores import COVERAGE_SIGMAS  # noqa: E402
 

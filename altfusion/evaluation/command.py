@@ -44,20 +44,20 @@ def _names(text: str | None) -> list[str] | None:
 
 def command_evaluate(args: argparse.Namespace) -> int:
     from altfusion.atomic import write_text
-    from altfusion.montecarlo.commands import INTERRUPTED, _report_outcome
-    from altfusion.montecarlo.evaluate_report import (
+    from altfusion.evaluation.report import (
         format_markdown,
         format_text,
         summary_json,
         write_html,
     )
-    from altfusion.montecarlo.evaluate_run import (
+    from altfusion.evaluation.run import (
         EvaluationSettings,
         evaluation_cells,
         plan_evaluation,
         run_evaluation,
         stored_runs,
     )
+    from altfusion.montecarlo.commands import INTERRUPTED, _report_outcome
     from altfusion.montecarlo.execution import Execution
 
     out = Path(args.out)
