@@ -5,7 +5,8 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from altfusion.estimators.base import BARO, RADAR, Estimator, HealthParams, status_bits
+from altfusion.estimators.base import Estimator, HealthParams, status_bits
+from altfusion.estimators.streams import BARO, RADAR
 from altfusion.fmi import estimator_variables
 from altfusion.fmi.state import StateHeader, dump, load
 from altfusion.params import param

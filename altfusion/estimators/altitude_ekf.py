@@ -60,17 +60,9 @@ import math
 from dataclasses import dataclass
 
 from altfusion.errors import ParameterError
-from altfusion.estimators.base import (
-    ACC,
-    BARO_ALL,
-    GPS_ALL,
-    LASER,
-    MAX_DELAY,
-    RADAR,
-    Estimator,
-    HealthParams,
-)
+from altfusion.estimators.base import MAX_DELAY, Estimator, HealthParams, Verdict
 from altfusion.estimators.kalman import quadratic_form, shift_state, update_scalar
+from altfusion.estimators.streams import ACC, BARO_ALL, GPS_ALL, LASER, RADAR
 from altfusion.params import param
 
 H, V, BA, D, K, T, G = range(7)
@@ -267,7 +259,7 @@ class AltitudeEKF(Estimator):
     def fuse_samples(self, samples) -> None:
         self._predict(samples.get(ACC))
         if ACC in samples:
-            self.accept("acc")
+            self.accept(self.aid["acc"])
         gps = samples.get(GPS_ALL)
         if gps is not None:
             instant = gps["gps_time"] - self.params.gps_delay
@@ -378,7 +370,7 @@ class AltitudeEKF(Estimator):
         elif self._reference_first(y, S):
             self._fuse_height(source, z, stamp, sigma)     # sets its offset anew
             return
-        if not self.gate(source, y, S, self.params.gate_sigma):
+        if self.gate(self.aid[source], y, S, self.params.gate_sigma) is not Verdict.FUSED:
             return
         self._range_rejected_since.pop(source, None)
         if source == self._reference:
@@ -395,7 +387,7 @@ class AltitudeEKF(Estimator):
         y = vz - v_s
         S = self.P[V][V] + (2.0 * delta * self.P[V][BA] + delta * delta * self.P[BA][BA]
                             if len(row) > 1 else 0.0) + R
-        if self.gate("gps_vz", y, S, self.params.gate_sigma):
+        if self.gate(self.aid["gps_vz"], y, S, self.params.gate_sigma) is Verdict.FUSED:
             self.x, self.P, _ = update_scalar(self.x, self.P, row, y, R)
 
     def _ground_effect(self, y: float) -> float:
@@ -416,7 +408,7 @@ class AltitudeEKF(Estimator):
         if p.gate_sigma <= 0.0 or y * y <= p.gate_sigma**2 * S:
             return False
         since = self._range_rejected_since.setdefault(source, self.time)
-        if self.time - since < p.reset_timeout or not self.contradicted(source, y):
+        if self.time - since < p.reset_timeout or not self.contradicted(self.aid[source], y):
             return False
         self._range_rejected_since.pop(source)
         self.x[T] -= y
@@ -426,7 +418,7 @@ class AltitudeEKF(Estimator):
         self.n_terrain_resets += 1
         self.note(f"{source}: inconsistent for {p.reset_timeout:g} s while the height is "
                   f"aided: terrain reset by {-y:.3g} m")
-        self.accept(source)
+        self.accept(self.aid[source])
         return True
 
     def _reference_step(self, source: str, y: float, S: float) -> bool:
@@ -444,10 +436,10 @@ class AltitudeEKF(Estimator):
             return False
         now = self.time
         if self._reference_rejected_since is None:
-            in_use = now - self._last_fused.get(source, -math.inf) <= p.reset_timeout
+            in_use = now - self.aid[source].last_fused <= p.reset_timeout
             self._reference_rejected_since = now if in_use else math.inf
         if now - self._reference_rejected_since < p.reset_timeout \
-                or self.contradicted(source, y):
+                or self.contradicted(self.aid[source], y):
             return False
         self._reset_to_reference(y, S)
         return True
@@ -471,7 +463,7 @@ class AltitudeEKF(Estimator):
 
     def _reset_to_reference(self, y: float, S: float) -> None:
         self._reference_rejected_since = None
-        self.height_reset(self._reference, y, S, f"the height reference rejected for "
+        self.height_reset(self.aid[self._reference], y, S, f"the height reference rejected for "
                                                  f"{self.params.reset_timeout:g} s")
 
     def _adaptation(self, source: str) -> float:
@@ -518,7 +510,7 @@ class AltitudeEKF(Estimator):
         self.h_c = x[H]
         self._reference_seen = source == self._reference
         self.started = True
-        self.accept(source)
+        self.accept(self.aid[source])
 
     def _first_sample(self, source: str, z: float, sigma: float) -> bool:
         """The first sample of the reference after a start from another source: see
@@ -553,7 +545,7 @@ class AltitudeEKF(Estimator):
             return False                                  # the datum: its prior
         self.x[index] = value
         self.P[index][index] = 0.0 if frozen else self.P[H][H] + sigma * sigma
-        self.accept(source)
+        self.accept(self.aid[source])
         return True
 
     def _first_reference(self, z: float, sigma: float) -> bool:

@@ -76,8 +76,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from altfusion.constants import G0, ISA_LAPSE_RATE, ISA_P0, ISA_T0, R_AIR
-from altfusion.estimators.base import BARO_P, GPS_QUALITY, Estimator, HealthParams, Stream
+from altfusion.estimators.base import Estimator, HealthParams, Verdict
 from altfusion.estimators.kalman import predict, update
+from altfusion.estimators.streams import BARO_P, GPS_QUALITY, Stream
 from altfusion.params import param
 from altfusion.physics.barometric import height_from_pressure
 
@@ -198,11 +199,12 @@ class BaoDriftEstimator(Estimator):
         on its jump from the last accepted one (not in the paper)."""
         p = self.params
         if not self.started:
-            self.accept("baro")
+            self.accept(self.aid["baro"])
         else:
             elapsed, self._baro_time = stamp - self._baro_time, stamp
-            if not self.gate("baro", h_baro - self.h_baro,
-                             self.jump_variance(p.R_baro, elapsed), p.gate_sigma):
+            verdict = self.gate(self.aid["baro"], h_baro - self.h_baro,
+                                self.jump_variance(p.R_baro, elapsed), p.gate_sigma)
+            if verdict is not Verdict.FUSED:
                 return
         self._baro_time = self._baro_accepted = stamp
         H = self.h_est if self.started else h_baro       # "the altitude of the last time"
@@ -235,7 +237,7 @@ class BaoDriftEstimator(Estimator):
         z = h_gps - self.h_baro_corrected                                       # (13)
         innovation = z - float(self.x[0])
         variance = float(self.P[0, 0]) + R
-        if not self.gate("gps", innovation, variance, p.gate_sigma):
+        if self.gate(self.aid["gps"], innovation, variance, p.gate_sigma) is not Verdict.FUSED:
             return
         result = update(self.x, self.P, z, ONE, R)
         self.x, self.P = result.x, result.P

@@ -24,8 +24,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from altfusion.estimators.base import BARO, GPS, Estimator, HealthParams, Stream
+from altfusion.estimators.base import Estimator, HealthParams, Verdict
 from altfusion.estimators.kalman import predict, shift_state, update
+from altfusion.estimators.streams import BARO, GPS, Stream
 from altfusion.params import param
 
 H_BARO = np.array([[1.0, 0.0, 1.0]])
@@ -90,12 +91,13 @@ class BaselineKF(Estimator):
         if not self.started:
             self.x[0] = z - self.x[2] if stream is BARO else z
             self.started = True
-            self.accept(stream.prefix)
+            self.accept(self.aid[stream.prefix])
             self._publish()
             return
         innovation = z - float((H @ self.x)[0])
         variance = float((H @ self.P @ H.T)[0, 0]) + R
-        if not self.gate(stream.prefix, innovation, variance, p.gate_sigma):
+        verdict = self.gate(self.aid[stream.prefix], innovation, variance, p.gate_sigma)
+        if verdict is not Verdict.FUSED:
             self._publish()
             return
         result = update(self.x, self.P, z, H, R)

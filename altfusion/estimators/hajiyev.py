@@ -72,8 +72,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from altfusion.estimators.base import BARO, GPS, Estimator, HealthParams, Stream
+from altfusion.estimators.base import Estimator, HealthParams, Verdict
 from altfusion.estimators.kalman import update
+from altfusion.estimators.streams import BARO, GPS, Stream
 from altfusion.params import param
 
 H = np.array([[1.0]])
@@ -160,11 +161,12 @@ class HajiyevAdaptiveEstimator(Estimator):
         p = self.params
         if not self.started:
             self.started = True
-            self.accept("baro")
+            self.accept(self.aid["baro"])
         else:
             elapsed, self._baro_time = stamp - self._baro_time, stamp
-            if not self.gate("baro", h_baro - self.baro, self.jump_variance(p.R_baro, elapsed),
-                             p.gate_sigma):
+            verdict = self.gate(self.aid["baro"], h_baro - self.baro,
+                                self.jump_variance(p.R_baro, elapsed), p.gate_sigma)
+            if verdict is not Verdict.FUSED:
                 return
         self._baro_time = stamp
         self.baro = h_baro
@@ -189,7 +191,9 @@ class HajiyevAdaptiveEstimator(Estimator):
             prior = self._reference_variance
             if p.fault_detection:
                 prior += p.drift_psd * (self.time - self._reference_time)
-            if not self.gate("gps", residual - self._reference, prior + noise, p.gate_sigma):
+            verdict = self.gate(self.aid["gps"], residual - self._reference, prior + noise,
+                                p.gate_sigma)
+            if verdict is not Verdict.FUSED:
                 self._fall_back(prior)
                 return False
             if p.fault_detection:
@@ -205,7 +209,7 @@ class HajiyevAdaptiveEstimator(Estimator):
         falls back to h_B plus the reference Δ̄ (the GPS-minus-baro offset learnt from the
         accepted residuals), variance R_B + ``prior`` (P̄ now). A rejected outlier leaves the
         held correction, as if the sample had not arrived."""
-        if not self.isolated("gps"):
+        if not self.aid["gps"].isolated:
             return
         self.correction = self._reference
         self.variance = self.params.R_baro + prior

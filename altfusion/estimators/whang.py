@@ -64,8 +64,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from altfusion.constants import ISA_LAPSE_RATE, ISA_T0
-from altfusion.estimators.base import BARO_T, GPS, Estimator, HealthParams
+from altfusion.estimators.base import Estimator, HealthParams, Verdict
 from altfusion.estimators.kalman import decorrelate, joseph, predict, shift_state, update
+from altfusion.estimators.streams import BARO_T, GPS
 from altfusion.params import param
 
 ONE = np.array([[1.0]])
@@ -176,18 +177,18 @@ class WhangGAEstimator(Estimator):
         paper); with it, its compensated height (eq. 32, the calibration before this
         step's z-update) against the alpha-beta prediction, S = P⁻_hh + R_h (eq. 34)."""
         if not (self.params.fault_detection and self.started):
-            self.accept("baro")
+            self.accept(self.aid["baro"])
             return True
         h_comp, R_h = self._compensated(h_baro)
-        return self.gate("baro", h_comp - self.h_prior, self.P_error[0, 0] + R_h,
-                         self.params.gate_sigma)
+        return self.gate(self.aid["baro"], h_comp - self.h_prior, self.P_error[0, 0] + R_h,
+                         self.params.gate_sigma) is Verdict.FUSED
 
     def _gps_height_update(self, h_gps: float) -> None:
         """The GPS height fused into the alpha-beta filter (eq. 34 with R^GPS) while the baro
         is rejected (``fault_detection`` only): z = h^B - h^GPS has no valid h^B then."""
         R = self.params.R_gps
-        if self.gate("gps", h_gps - self.h_prior, self.P_error[0, 0] + R,
-                     self.params.gate_sigma):
+        if self.gate(self.aid["gps"], h_gps - self.h_prior, self.P_error[0, 0] + R,
+                     self.params.gate_sigma) is Verdict.FUSED:
             self._alpha_beta_update(h_gps, R, R)
 
     def _lambda_update(self, temperature: float) -> None:
@@ -209,8 +210,8 @@ class WhangGAEstimator(Estimator):
         z = self.baro - h_gps
         lever = h_gps - p.H0
         innovation = z - lever * self.a - self.b
-        if not self.gate("gps", innovation, self.P_b + R + lever**2 * self.P_a, p.gate_sigma,
-                         aids_height=False):
+        if self.gate(self.aid["gps"], innovation, self.P_b + R + lever**2 * self.P_a, p.gate_sigma,
+                         aids_height=False) is not Verdict.FUSED:
             return
         if abs(lever) >= MIN_LEVER:
             z_a = (z - self.b) / lever                                          # (23)

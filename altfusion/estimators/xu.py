@@ -64,8 +64,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from altfusion.estimators.base import ACC, BARO, GPS, LASER, Estimator, HealthParams, Stream
+from altfusion.estimators.base import Estimator, HealthParams, Verdict
 from altfusion.estimators.kalman import predict, shift_state, update
+from altfusion.estimators.streams import ACC, BARO, GPS, LASER, Stream
 from altfusion.params import param
 
 BARO_SOURCE, LASER_SOURCE = 0, 1
@@ -210,7 +211,7 @@ class XuSHAEKF(Estimator):
     def fuse_samples(self, samples: dict[Stream, dict[str, float]]) -> None:
         p = self.params
         if ACC in samples:
-            self.accept("acc")
+            self.accept(self.aid["acc"])
             self._accelerometer(samples[ACC]["acc_z"])
         if LASER in samples:
             self._last_laser_time = self.time
@@ -249,7 +250,7 @@ class XuSHAEKF(Estimator):
         channel = self.channels[name]
         if not self.started:
             self._start(z, H, channel.R_hat)
-            self.accept(name)
+            self.accept(self.aid[name])
             return
         innovation = z - float((H @ self.x)[0])                                 # (20)
         hph = float((H @ self.P @ H.T)[0, 0])
@@ -258,14 +259,14 @@ class XuSHAEKF(Estimator):
             channel.weight = 1.0 if ratio <= p.weight_c else (p.weight_c / ratio) ** 2
         C = hph + channel.R_hat
         active = name != "gps"
-        if not self.gate(name, innovation, C, p.gate_sigma):
+        if self.gate(self.aid[name], innovation, C, p.gate_sigma) is not Verdict.FUSED:
             channel.rejections += 1
             if not (active and channel.rejections > p.max_rejections
-                    and not self.contradicted(name, innovation)):
+                    and not self.contradicted(self.aid[name], innovation)):
                 return
             self.note(f"{name}: re-acquired after {p.max_rejections} consecutive rejections "
                       f"(innovation {innovation:.4g} m)")
-            self.accept(name)
+            self.accept(self.aid[name])
             channel.window.clear()
             channel.weight = 1.0
         channel.rejections = 0

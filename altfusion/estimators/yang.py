@@ -101,15 +101,7 @@ import math
 from collections import deque
 from dataclasses import dataclass
 
-from altfusion.estimators.base import (
-    ACC,
-    BARO,
-    GPS_VZ,
-    MAX_DELAY,
-    RADAR,
-    Estimator,
-    HealthParams,
-)
+from altfusion.estimators.base import MAX_DELAY, Estimator, HealthParams, Verdict
 from altfusion.estimators.kalman import (
     constant_states_noise,
     predict_constant_acceleration,
@@ -118,6 +110,7 @@ from altfusion.estimators.kalman import (
     update_scalar,
     white_jerk_noise,
 )
+from altfusion.estimators.streams import ACC, BARO, GPS_VZ, RADAR
 from altfusion.params import param
 
 HEIGHT_SENSORS = ("radar", "gps", "baro")
@@ -301,7 +294,7 @@ class YangFusionKF(Estimator):
             x, P, _ = update_scalar(x, P, row, z - predicted(x, row), R)
         acc = samples.get(ACC)
         if acc is not None:                      # the IMU measures a + b (b = 0 in the paper)
-            self.accept("acc")
+            self.accept(self.aid["acc"])
             x, P, _ = update_scalar(x, P, ACC_ROW, acc["acc_z"] - x[2] - x[3], p.R_acc)
         self.x, self.P = x, P
         self._publish()
@@ -309,14 +302,14 @@ class YangFusionKF(Estimator):
     def _gate(self, name: str, z: float) -> bool:
         """True if the height sample may enter the fusion (always before the filter starts)."""
         if not self.started:
-            self.accept(name)
+            self.accept(self.aid[name])
             return True
         P = self.P
         offset = OFFSET_STATE.get(name)
         variance = P[0][0] if offset is None else \
             P[0][0] + 2.0 * P[0][offset] + P[offset][offset]
-        return self.gate(name, z - predicted(self.x, HEIGHT_ROWS[name]),
-                         variance + self.variances[name], self.params.gate_sigma)
+        return self.gate(self.aid[name], z - predicted(self.x, HEIGHT_ROWS[name]),
+                         variance + self.variances[name], self.params.gate_sigma) is Verdict.FUSED
 
     def _speed_passes(self, vz: float, lag: float) -> bool:
         """The gate on the GPS vertical speed against the predicted speed at its instant,
@@ -326,12 +319,12 @@ class YangFusionKF(Estimator):
         speed resets onto the GPS (base machinery). Gate and reset come together: with
         ``fault_detection`` false the speed is fused ungated, as in the paper."""
         if not (self.started and self.params.fault_detection):
-            self.accept("gps_vz")
+            self.accept(self.aid["gps_vz"])
             return True
         row = speed_row(lag)
-        return self.gate("gps_vz", vz - predicted(self.x, row),
+        return self.gate(self.aid["gps_vz"], vz - predicted(self.x, row),
                          quadratic_form(self.P, row) + self.params.R_gps_vz,
-                         self.params.gate_sigma)
+                         self.params.gate_sigma) is Verdict.FUSED
 
     def reset_height(self, source: str, innovation: float, variance: float) -> None:
         """A GPS speed reset moves the speed onto the sample. A height reset: height onto the
