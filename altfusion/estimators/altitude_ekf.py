@@ -19,7 +19,7 @@ latest one, held):
        terrain_psd and gps_bias_psd on the others (0 on the reference's frozen states)
 
 Without an accelerometer acc_z is taken as 0, so that b_a carries minus the vehicle's
-acceleration: a constant-acceleration model (seed 003's eq. 11 with white jerk), b_a a random
+acceleration: a constant-acceleration model (yang2020's eq. 11 with white jerk), b_a a random
 walk of ``jerk_psd``, plus white acceleration of ``accel_psd`` on (h, v).
 
 Measurements (one scalar update each, Joseph form, ``kalman.update_scalar``), each at its own
@@ -29,7 +29,7 @@ h(s) = h - δ·v + δ²/2·a and v(s) = v - δ·a, and the Jacobian row follows 
 
     baro:  z = h(s) + d + k·(h(s) - h_c)    (h_c: height at start; d = k = 0: height_ref baro)
     GNSS height:  z = h(s) + g    (g = 0: height_ref gps),
-                  σ = gps_noise·(VDOP/gps_vdop_ref)·√max(1, gps_nsat_ref/N)  (seed 001)
+                  σ = gps_noise·(VDOP/gps_vdop_ref)·√max(1, gps_nsat_ref/N)  (bao2017)
     GNSS vertical speed:  z = v(s);   radar, laser:  z = h(s) - t
 
 Each sample passes the shared innovation gate (``gate_sigma``, PX4's 5σ) and health logic of
@@ -50,9 +50,9 @@ Deviations from PX4 EKF2 (reasons in docs/altitude_ekf.md):
   being observed and the remaining sources carry the height without a step;
 * the ground-effect dead zone applies within ``ground_effect_height`` of the terrain (or of
   the starting height), not on a land detector's flag; off by default;
-* optional innovation-based noise adaptation (seed 004): each source's R is scaled by its
+* optional innovation-based noise adaptation (xu2016): each source's R is scaled by its
   windowed mean normalized innovation squared, bounded to [1, ``adaptive_max``];
-* the barometer's temperature error (seed 000) is the scale-factor state k, not a
+* the barometer's temperature error (whang2008) is the scale-factor state k, not a
   temperature model: ``baro_p`` and ``baro_T`` are read but not fused.
 """
 
@@ -90,7 +90,7 @@ class AltitudeEKFParams(HealthParams):
                                             "fused", positive=True)
     jerk_psd: float = param(0.01, "m2/s5", "PSD of the white jerk driving the motion model's "
                                            "acceleration (state b_a) while no accelerometer is "
-                                           "fused (seed 003's jerk_psd)", min=0.0)
+                                           "fused (yang2020's jerk_psd)", min=0.0)
     acc_bias_psd: float = param(1e-5, "m2/s5", "PSD of the accelerometer-bias random walk "
                                                "(PX4 EKF2_ACC_B_NOISE 0.003 m/s³ squared)",
                                 min=0.0)
@@ -103,7 +103,7 @@ class AltitudeEKFParams(HealthParams):
     terrain_psd: float = param(0.01, "m2/s", "PSD of the terrain-height random walk",
                                min=0.0)
     gps_dop_scaling: bool = param(True, None, "Scale the GNSS height noise by VDOP and the "
-                                              "satellite count (seed 001)")
+                                              "satellite count (bao2017)")
     gps_vdop_ref: float = param(1.0, "1", "VDOP at which gps_noise holds: the GNSS noise is "
                                           "scaled by VDOP/gps_vdop_ref", positive=True)
     gps_nsat_ref: int = param(6, None, "Satellites below which the GNSS noise grows as "
@@ -128,7 +128,7 @@ class AltitudeEKFParams(HealthParams):
     ground_effect_height: float = param(1.0, "m", "Height above the terrain within which the "
                                                   "ground-effect dead zone applies", min=0.0)
     adaptive_noise: bool = param(False, None, "Scale each source's R by its windowed mean "
-                                              "normalized innovation squared (seed 004)")
+                                              "normalized innovation squared (xu2016)")
     adaptive_window: float = param(20.0, "1", "Samples in the exponential window of the "
                                               "noise adaptation", min=1.0)
     adaptive_max: float = param(10.0, "1", "Largest factor of the noise adaptation",
@@ -303,7 +303,7 @@ class AltitudeEKF(Estimator):
         x[V] -= share * min(x[V], 0.0)
 
     def _gps_sigma(self, sample) -> float:
-        """σ_G = gps_noise·(VDOP/gps_vdop_ref)·√max(1, N_ref/N) (seed 001's η; VDOP or N
+        """σ_G = gps_noise·(VDOP/gps_vdop_ref)·√max(1, N_ref/N) (bao2017's η; VDOP or N
         not given: factor 1)."""
         p = self.params
         if not p.gps_dop_scaling:
@@ -467,7 +467,7 @@ class AltitudeEKF(Estimator):
                                                  f"{self.params.reset_timeout:g} s")
 
     def _adaptation(self, source: str) -> float:
-        """The factor on R of seed 004's bounded innovation-based adaptation (1: off)."""
+        """The factor on R of xu2016's bounded innovation-based adaptation (1: off)."""
         if not self.params.adaptive_noise:
             return 1.0
         return min(max(self._nis.get(source, 1.0), 1.0), self.params.adaptive_max)

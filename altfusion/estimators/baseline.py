@@ -38,9 +38,9 @@ class BaselineKFParams(HealthParams):
     accel_psd: float = param(0.5, "m2/s3", "PSD q_a of the white vertical acceleration",
                              positive=True)
     bias_psd: float = param(0.05, "m2/s", "PSD q_b of the baro-bias random walk", min=0.0)
-    R_baro: float = param(25.0, "m2", "Baro height noise variance R_B (seed 000: 5² m²)",
+    R_baro: float = param(25.0, "m2", "Baro height noise variance R_B (whang2008: 5² m²)",
                           positive=True)
-    R_gps: float = param(4900.0, "m2", "GPS height noise variance R_G (seed 000: 70² m²)",
+    R_gps: float = param(4900.0, "m2", "GPS height noise variance R_G (whang2008: 70² m²)",
                          positive=True)
     P0_h: float = param(100.0, "m2", "Initial altitude variance at the first sample",
                         positive=True)

@@ -63,7 +63,7 @@ def update(x: np.ndarray, P: np.ndarray, z: np.ndarray | float, H: np.ndarray,
         x = x⁻ + K y
         P = (I - K H) P⁻ (I - K H)ᵀ + K R Kᵀ
 
-    ``gain_scale`` (a weight α ≤ 1 on the gain, seed 004 eq. 26) keeps the Joseph form exact
+    ``gain_scale`` (a weight α ≤ 1 on the gain, xu2016 eq. 26) keeps the Joseph form exact
     for the gain actually used.
     """
     z = np.asarray(z, dtype=float).reshape(-1)

@@ -1,4 +1,4 @@
-"""WhangGAEstimator: baro-error estimation by a Gaussian-approximation filter (seed 000).
+"""WhangGAEstimator: baro-error estimation by a Gaussian-approximation filter (whang2008).
 
 Fig. 1 of the paper, block by block:
 
@@ -7,7 +7,7 @@ Fig. 1 of the paper, block by block:
   - system propagation, random walks (eqs. 11-12, 17-18), Q_a and Q_b per air-data step;
   - λ-update at the air-data rate with the temperature pseudo-measurement (eqs. 6-7, 19-22),
     λ = s·(T_ADM - Γ̂ (ĥ_{k|k-1} - H0) - T0)/T0, Var = (Var T + Γ̂² Var ĥ + (ĥ - H0)² Var Γ)/T0²
-    (T0² as corrected in NOTES.md);
+    (T0² as corrected in docs/papers.md);
   - z-update at the GPS rate with z = h^B - h^GPS (eqs. 23-31), using h^GPS - H0 where the
     paper, taking H0 ≈ 0, writes h^GPS;
 * baro-error compensation: h^c = H0 + (h^B - H0 - b̂)/(1 + â) (eq. 32) filtered by the
@@ -19,7 +19,7 @@ noises, given per air-data step Δt^B, are scaled by dt/Δt^B); with the estimat
 
 Deviations from the paper:
 
-* Sign of λ (seeds NOTES.md): a warmer day than the calibration makes the barometer read low,
+* Sign of λ (docs/papers.md): a warmer day than the calibration makes the barometer read low,
   h^B - H0 ≈ (1 - ΔT/T0)(h - H0), so a ≈ -ΔT/T0, opposite to eq. (3). ``paper_lambda_sign``
   false (default) takes the physical sign s = -1; true restores eq. (6), s = +1.
 * GPS gate: a z-update whose innovation exceeds ``gate_sigma`` standard deviations
@@ -36,9 +36,9 @@ Deviations from the paper:
   instead (eq. 34 with R^GPS), so the GPS aids the height and the shared isolation logic
   (estimators/base.py) can isolate the baro; an isolated baro whose innovations keep one
   sign is re-admitted with b̂ moved onto it (``reset_offset``: b̂ += (1 + â)·(h^c -
-  ĥ_{k|k-1})), a height reset moves ĥ. The paper's Q_b (400 m² per air-data step: seed 000's
+  ĥ_{k|k-1})), a height reset moves ĥ. The paper's Q_b (400 m² per air-data step: whang2008's
   weather) widens R_h so fast that a 200 m baro step passes the gate after 0.15 s and is
-  absorbed by b̂ (seed 000 reproduction unchanged: its run 0 reference matches); with a
+  absorbed by b̂ (whang2008 reproduction unchanged: its run 0 reference matches); with a
   flight's true, small bias walk (the fault flight: ``systems.faults.TRUE_NOISE``) a failed
   baro is isolated 2.5 s after it steps and re-admitted on its new bias 2.5 s later.
 * ``MIN_LEVER``: below 1 m of h^GPS - H0 the scale-factor update of eqs. (23)-(26) is skipped
@@ -52,10 +52,10 @@ Deviations from the paper:
   calibration â, b̂; but â and b̂ change at GPS samples only, so the N air-data samples
   between two GPS samples (N = GPS interval / air-data interval, from the time stamps)
   share one calibration error, which the filter averages down as if independent: h_std was
-  overconfident (coverage of |e| <= 2 h_std 0.80 in seed 000's scenario). ``h_std`` is the
+  overconfident (coverage of |e| <= 2 h_std 0.80 in whang2008's scenario). ``h_std`` is the
   error covariance of the filter's own gain K under the equivalent white noise of that
   shared error, R^B' + N·C (``kalman.joseph``), from the first sample's R_h (the start
-  above): coverage 0.99 in seed 000's scenario (N = 5), 0.98 on the fault suite's flight
+  above): coverage 0.99 in whang2008's scenario (N = 5), 0.98 on the fault suite's flight
   (N = 2).
 """
 
@@ -81,12 +81,12 @@ class WhangParams(HealthParams):
     H0: float = param(0.0, "m", "Launch height of the baro calibration")
     T0: float = param(ISA_T0, "K", "Launch temperature of the baro calibration")
     lapse_rate: float = param(ISA_LAPSE_RATE, "K/m", "Nominal lapse rate Γ̂")
-    lapse_rate_var: float = param(0.003**2, "K2/m2", "Var{Γ̂} (seed 000: (0.003 K/m)²)",
+    lapse_rate_var: float = param(0.003**2, "K2/m2", "Var{Γ̂} (whang2008: (0.003 K/m)²)",
                                   min=0.0)
-    R_temperature: float = param(1.5**2, "K2", "Var{T_ADM} (seed 000: 1.5² K²)", min=0.0)
-    R_baro: float = param(5.0**2, "m2", "R^B, baro-height noise variance (seed 000: 5² m²)",
+    R_temperature: float = param(1.5**2, "K2", "Var{T_ADM} (whang2008: 1.5² K²)", min=0.0)
+    R_baro: float = param(5.0**2, "m2", "R^B, baro-height noise variance (whang2008: 5² m²)",
                           positive=True)
-    R_gps: float = param(70.0**2, "m2", "R^GPS (seed 000: 70² m²)", positive=True)
+    R_gps: float = param(70.0**2, "m2", "R^GPS (whang2008: 70² m²)", positive=True)
     Q_a: float = param(2e-5, "1", "Scale-factor random-walk variance per air-data step",
                        min=0.0)
     Q_b: float = param(400.0, "m2", "Bias random-walk variance per air-data step", min=0.0)
@@ -100,14 +100,14 @@ class WhangParams(HealthParams):
     adm_period: float = param(0.2, "s", "Air-data period Δt^B the noises are given for",
                               positive=True)
     paper_lambda_sign: bool = param(False, None, "λ with the sign of eq. (6) instead of "
-                                                 "the physical sign (see NOTES.md)")
+                                                 "the physical sign (see docs/papers.md)")
     gate_sigma: float = param(5.0, "1", "Innovation gate on GPS (z-update) and, with "
                                         "fault_detection, on the baro, in standard "
                                         "deviations (0: off); not in the paper", min=0.0)
 
 
 class WhangGAEstimator(Estimator):
-    """Whang & Ra's GA baro-error estimation and compensation filter (seed 000, Fig. 1)."""
+    """Whang & Ra's GA baro-error estimation and compensation filter (whang2008, Fig. 1)."""
 
     Params = WhangParams
     streams = (BARO_T, GPS)

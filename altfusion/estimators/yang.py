@@ -1,10 +1,10 @@
 """YangFusionKF: optimal weighted fusion of GPS, baro and radio-altimeter heights, then a
-Kalman filter on height, vertical speed and acceleration (seed 003, Fig. 1).
+Kalman filter on height, vertical speed and acceleration (yang2020, Fig. 1).
 
 Section 3.1, space-time unification of the heights:
 
 * time (3.1.1): each height sensor's samples are brought to the time t_b of the benchmark
-  sample by eq. (5) as corrected in NOTES.md, a linear extrapolation through its last two
+  sample by eq. (5) as corrected in docs/papers.md, a linear extrapolation through its last two
   samples (t_c < t_a) read from their ``<prefix>_time`` stamps:
   Q_tb = Q_ta + (t_b - t_a)(Q_ta - Q_tc)/(t_a - t_c)  (Q_ta alone after a sensor's first sample).
   The benchmark is the sensor with the largest sampling period (radio altimeter 200 ms, GPS
@@ -13,7 +13,7 @@ Section 3.1, space-time unification of the heights:
   ``max_sample_age`` old. So the fusion falls back to GPS and baro when the radar is out of
   range, and to the baro alone when GPS is out as well.
 * space (3.1.2), eq. (6): the radio altimeter measures above the terrain, so its height is
-  Q_real = Q + Q_sealevel with Q_sealevel the parameter ``terrain_h`` (seed 003 flies over
+  Q_real = Q + Q_sealevel with Q_sealevel the parameter ``terrain_h`` (yang2020 flies over
   terrain at sea level: 0).
 
 Section 3.2, optimal weighted fusion (eqs. 7-8) of the live sensors at t_b:
@@ -31,7 +31,7 @@ starts at the first fusion with h = y, Var h = σ_y².
 Deviations from the paper:
 
 * process noise: the paper's filter has none (eq. 11); taken literally it cannot follow the
-  trajectory's acceleration steps (seeds NOTES.md), so eq. (11) gets a white-jerk process
+  trajectory's acceleration steps (docs/papers.md), so eq. (11) gets a white-jerk process
   noise of spectral density ``jerk_psd``, Q = q·∫ φφᵀ with φ = [t²/2, t, 1];
 * gates: a height sample whose difference from the predicted height exceeds ``gate_sigma``
   standard deviations √(P_hh + σ_i²) is rejected before it enters the fusion, and so is a GPS
@@ -40,7 +40,7 @@ Deviations from the paper:
   plausibility bound only (acceleration steps are real), which drops clipped readings
   (beyond 95 % of 16 g: a ±16 g clipping episode fused as accelerations threw the height
   3 m off);
-* accelerometer bias (with ``fault_detection``; seed 003 has none): eq. (12)'s row for the
+* accelerometer bias (with ``fault_detection``; yang2020 has none): eq. (12)'s row for the
   IMU measures a + b, b a fourth state, constant up to a random walk of spectral density
   ``acc_bias_psd``, starting at 0 with variance ``P0_acc_bias`` (PX4 EKF2's EKF2_ACC_B_NOISE
   and EKF2_ABIAS_INIT). Without it the acceleration row (σ_a = 0.01 m/s²) pins the speed and
@@ -50,10 +50,10 @@ Deviations from the paper:
   and the height stays within its h_std (0.42 m RMS, coverage 96 %). With
   ``fault_detection`` false the state has zero variance and no process noise: the filter is
   the paper's, bit for bit;
-* baro offset (with ``fault_detection``; seed 003's barometer has none): a fifth state d,
+* baro offset (with ``fault_detection``; yang2020's barometer has none): a fifth state d,
   the barometer's offset, a random walk of spectral density ``baro_bias_psd`` (PX4 EKF2's
   baro_bias_nsd, 0.13 m/s/√Hz) from 0 with variance ``P0_baro_bias`` (0: calibrated at the
-  start, as in seed 003). Eqs. (7)-(8) fuse the heights as independent white errors; a
+  start, as in yang2020). Eqs. (7)-(8) fuse the heights as independent white errors; a
   drifting barometer (warm-up, weather) moved the fused height by its weight 9/49 and the
   filter, which averages y down to 0.2 m, followed it (fault suite ``baro_drift``: 1.26 m
   RMS against 0.18 m nominal, coverage 0.54). With the offset state the time-unified
@@ -93,7 +93,7 @@ Scenario of the paper (Section 4): profile ``yang2020`` (climb, cruise at 1440 m
 (``user_range_error`` 20 m at VDOP 1.5) and σ_v = 0.2 m/s; AirDataModule every 10 ms with 20 m
 white noise, no scale-factor error and no drift; RadioAltimeter every 200 ms with 10 m over flat
 terrain at 0 m; Accelerometer with 0.01 m/s² (its rate is not given: 10 ms here); sensor
-clocks aligned (NOTES.md); the estimator stepped every 10 ms; 500 Monte Carlo runs, accuracy
+clocks aligned (docs/papers.md); the estimator stepped every 10 ms; 500 Monte Carlo runs, accuracy
 by eq. (15).
 """
 
@@ -182,10 +182,10 @@ class YangParams(HealthParams):
     R_acc: float = param(1e-4, "m2/s4", "IMU acceleration variance (Section 4.2: 0.01 m/s²)",
                          positive=True)
     jerk_psd: float = param(0.01, "m2/s5", "Spectral density of the white jerk added to eq. "
-                                           "(11); the paper has no process noise (NOTES.md)",
+                                           "(11); the paper has no process noise (docs/papers.md)",
                             positive=True)
     terrain_h: float = param(0.0, "m", "Q_sealevel of eq. (6): terrain height under the radio "
-                                       "altimeter (seed 003: sea level)")
+                                       "altimeter (yang2020: sea level)")
     max_sample_age: float = param(0.5, "s", "A height sensor takes part in a fusion while its "
                                             "last sample is at most this old", positive=True)
     P0_vz: float = param(100.0, "m2/s2", "Initial vertical-speed variance", positive=True)
@@ -198,7 +198,7 @@ class YangParams(HealthParams):
                                                "random walk (PX4 EKF2_ACC_B_NOISE: 3e-3 "
                                                "m/s³); with fault_detection only", min=0.0)
     P0_baro_bias: float = param(0.0, "m2", "Initial variance of the baro-offset state (0: the "
-                                           "baro calibrated at the start, as in seed 003); "
+                                           "baro calibrated at the start, as in yang2020); "
                                            "with fault_detection only", min=0.0)
     baro_bias_psd: float = param(0.0169, "m2/s", "Spectral density of the baro offset's "
                                                  "random walk (PX4 EKF2 baro_bias_nsd: 0.13 "
@@ -222,7 +222,7 @@ class YangParams(HealthParams):
 
 
 class YangFusionKF(Estimator):
-    """Yang et al.'s altitude measurement (seed 003): time-unified, optimally weighted
+    """Yang et al.'s altitude measurement (yang2020): time-unified, optimally weighted
     GPS/baro/radio-altimeter heights and a height/speed/acceleration Kalman filter."""
 
     Params = YangParams
