@@ -224,7 +224,7 @@ def update_state_component(x: Vector, P: Matrix, index: int, z: float, variance:
 def quadratic_form(P: Matrix, H: Sequence[tuple[int, float]]) -> float:
     """H P Hᵀ for a sparse row H ((state index, coefficient) pairs): the variance of the
     measured combination of states, the innovation variance without R."""
-    return sum(c * sum(c2 * P[i][j] for j, c2 in H) for i, c in H)
+    return sparse_dot({i: sparse_dot(P[i], H) for i, _ in H}, H)
 
 
 def update_scalar(x: Vector, P: Matrix, H: Sequence[tuple[int, float]], innovation: float,
@@ -238,11 +238,35 @@ def update_scalar(x: Vector, P: Matrix, H: Sequence[tuple[int, float]], innovati
         P = P⁻ - (K rᵀ + r Kᵀ) + S K Kᵀ            (Joseph form, as update_state_component)
 
     P stays exactly symmetric (each entry's sum is the same float for (a, b) and (b, a))."""
-    row = [sum(h * P_a[i] for i, h in H) for P_a in P]
-    S = sum(h * row[i] for i, h in H) + variance
+    row = _times_row(P, H)
+    S = sparse_dot(row, H) + variance
     K = [r / S for r in row]
     x_new = [xa + ka * innovation for xa, ka in zip(x, K, strict=True)]
     P_new = [[p_ab - (k_a * r_b + r_a * k_b) + k_a * k_b * S
               for p_ab, r_b, k_b in zip(P_a, row, K, strict=True)]
              for P_a, r_a, k_a in zip(P, row, K, strict=True)]
     return x_new, P_new, S
+
+
+def _times_row(P: Matrix, H: Sequence[tuple[int, float]]) -> list[float]:
+    """P Hᵀ for a sparse row H: each entry the sum of H's terms from 0 in H's order (the
+    float :func:`sum` gives), written out for one and two terms (the common rows)."""
+    if len(H) == 1:
+        (i, h), = H
+        return [0.0 + h * P_a[i] for P_a in P]
+    if len(H) == 2:
+        (i, h), (j, g) = H
+        return [0.0 + h * P_a[i] + g * P_a[j] for P_a in P]
+    return [sum(h * P_a[i] for i, h in H) for P_a in P]
+
+
+def sparse_dot(v: Vector, H: Sequence[tuple[int, float]]) -> float:
+    """H v for a sparse row H ((state index, coefficient) pairs), summed from 0 in H's order
+    (the float :func:`sum` gives; :func:`_times_row` sums the same way)."""
+    if len(H) == 1:
+        (i, h), = H
+        return 0.0 + h * v[i]
+    if len(H) == 2:
+        (i, h), (j, g) = H
+        return 0.0 + h * v[i] + g * v[j]
+    return sum(h * v[i] for i, h in H)
