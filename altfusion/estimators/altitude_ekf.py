@@ -61,6 +61,7 @@ from dataclasses import dataclass
 
 from altfusion.errors import ParameterError
 from altfusion.estimators.base import MAX_DELAY, Estimator, HealthParams, Verdict
+from altfusion.estimators.health import UNKNOWN_STD
 from altfusion.estimators.kalman import quadratic_form, shift_state, update_scalar
 from altfusion.estimators.streams import ACC, BARO_ALL, GPS_ALL, LASER, RADAR
 from altfusion.params import param
@@ -587,7 +588,7 @@ class AltitudeEKF(Estimator):
     def _publish(self) -> None:
         x, P = self.x, self.P
         self.h_est, self.vz_est = x[H], x[V]
-        self.h_std = math.sqrt(max(P[H][H], 0.0))
+        self.h_std = math.sqrt(max(P[H][H], 0.0)) if self.started else UNKNOWN_STD
         self.vz_std = math.sqrt(max(P[V][V], 0.0))
         self.acc_bias = x[BA] if self._acc_used else 0.0
         self.baro_bias = x[D]

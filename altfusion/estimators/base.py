@@ -6,11 +6,10 @@ step; the time update runs at every step. A sample that is invalid or not finite
 and noted (logged by the FMU), so nothing propagates into the state; a value beyond its
 plausibility bound is rejected as its source's.
 
-Time stamps. An engine that steps slow components first (ECOS) shows the estimator a sample
-stamped ahead of its clock (a 10 Hz GPS sample of t = 0.10 s at t = 0.01 s). Such a sample is
-held until the estimator's clock reaches its stamp and fused then, so every engine fuses it at
-the same instant up to one estimator step. A stamp further ahead than ``max_sample_lead``, or
-not finite, is absurd: the sample is refused (counted in ``n_ignored`` and noted).
+Time stamps (:mod:`~altfusion.estimators.intake`): a sample stamped ahead of the clock is
+held until due; one stamped further ahead than ``max_sample_lead``, further behind than
+``max_sample_delay`` or before its stream's last sample is refused and counted in
+``<prefix>_rejected``.
 
 Each source (``baro``, ``gps``, ``radar``, ``laser``, ``gps_vz``, ``acc``) has an
 :class:`~altfusion.estimators.aid_source.AidSource`; :meth:`Estimator.gate` gives each gated
@@ -78,7 +77,10 @@ class HealthParams:
                                        "no speed state to predict it", positive=True)
     max_sample_lead: float = param(1.0, "s", "A sample stamped at most this far ahead of the "
                                              "estimator's clock is held until due; further: "
-                                             "refused", min=0.0)
+                                             "refused (counted in <prefix>_rejected)", min=0.0)
+    max_sample_delay: float = param(3.0, "s", "A sample stamped more than this behind the "
+                                              "estimator's clock is stale: refused (counted in "
+                                              "<prefix>_rejected)", positive=True)
 
 
 def _source_output(index: int, field: str) -> property:

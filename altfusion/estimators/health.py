@@ -17,6 +17,13 @@ SOURCES = (*HEIGHT_SOURCES, "gps_vz", "acc")
 """Every source with a test ratio and a rejection count, in the order of their status bits."""
 
 
+UNKNOWN_STD = 1e5
+"""``h_std`` of an estimator not yet initialized, m (with ``h_valid`` false): ±100 km, the
+plausibility bound of any height. A finite maximum rather than infinity, so that every host
+takes it as it takes any other value (an FMI Real, a CSV cell, a JSON number, a plot's
+axis, a coverage test |e| <= 2 h_std), while no estimate can claim less certainty."""
+
+
 class Status(IntFlag):
     """The estimator-wide bits of the ``status`` output (bits 0-7)."""
 
@@ -28,6 +35,10 @@ class Status(IntFlag):
     """The height was reset to a source in this step."""
     SAMPLE_HELD = 1 << 3
     """A sample stamped ahead of the estimator's clock waits until due."""
+    SAMPLE_REFUSED = 1 << 4
+    """A sample was refused in this step for its time stamp: further ahead of the clock than
+    ``max_sample_lead``, further behind than ``max_sample_delay``, or before its stream's
+    last sample."""
 
 
 STEP_BITS = SimpleNamespace(**{flag.name: int(flag) for flag in Status})

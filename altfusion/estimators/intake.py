@@ -1,11 +1,22 @@
 """Sample intake: an estimator's stream inputs, new samples, held samples, plausibility.
 
 A measurement update happens exactly once per new sample (its count changed). A sample that
-is invalid (its validity flag false) or not finite is ignored and noted; a sample stamped
-ahead of the estimator's clock is held until due (at most ``max_sample_lead`` ahead, else
-refused); a value beyond its plausibility bound (:data:`~.streams.PLAUSIBLE_RANGE`) is
-rejected as its source's. Inputs outside any stream (``extra_inputs``) are read with
-:meth:`SampleIntake.held_input`.
+is invalid (its validity flag false) or not finite is ignored and noted (``n_ignored``); a
+value beyond its plausibility bound (:data:`~.streams.PLAUSIBLE_RANGE`) is rejected as its
+source's.
+
+Time stamps. A sample stamped ahead of the estimator's clock is held until due: an engine
+that steps slow components first (ECOS) shows the estimator a 10 Hz GPS sample of t = 0.10 s
+at t = 0.01 s, and every engine then fuses it at the same instant up to one estimator step.
+A sample whose stamp cannot be the present one is refused, counted in ``<prefix>_rejected``
+(and ``n_rejected``), noted and flagged in ``status`` (``SAMPLE_REFUSED``) for the step:
+
+* from the future: stamped more than ``max_sample_lead`` ahead of the clock;
+* stale: stamped more than ``max_sample_delay`` behind the clock (a GNSS sample 10 s old
+  fused as if current would move the height by 10 s of climb);
+* out of order: stamped before the last sample taken from the same stream.
+
+Inputs outside any stream (``extra_inputs``) are read with :meth:`SampleIntake.held_input`.
 """
 
 import math
@@ -42,6 +53,8 @@ class SampleIntake:
         self._held: dict[str, dict[str, float]] = {}
         """Samples stamped ahead of the clock, by stream prefix (a key of plain data: a
         saved and restored state holds copies of the Stream constants, never the same ones)."""
+        self._last_stamp = dict.fromkeys(self._last_count, -math.inf)
+        """The stamp of the last sample taken from each stream, by prefix."""
         self.n_ignored = 0
         self._step_flags = 0
         self._held_inputs: dict[str, float] = {}
@@ -54,17 +67,18 @@ class SampleIntake:
         """The samples to fuse in this step: the new ones not stamped ahead of the clock and
         the held ones now due, by stream."""
         samples = {}
-        last_count = self._last_count
+        last_count, held = self._last_count, self._held
         for stream in self.streams:
             count = getattr(self, stream.count)
             if count != last_count[stream.prefix]:
                 sample = self._new_sample(stream, count)
                 if sample is not None:
-                    self._held[stream.prefix] = sample
-            sample = self._held.get(stream.prefix)
-            if sample is not None and self._due(sample[stream.time]):
-                del self._held[stream.prefix]
-                samples[stream] = sample
+                    held[stream.prefix] = sample
+            if held:
+                sample = held.get(stream.prefix)
+                if sample is not None and self._due(sample[stream.time]):
+                    del held[stream.prefix]
+                    samples[stream] = sample
         return samples
 
     def _due(self, stamp: float) -> bool:
@@ -74,35 +88,51 @@ class SampleIntake:
 
     def _new_sample(self, stream: Stream, count: int) -> dict[str, float] | None:
         """The sample of ``stream``, whose count changed to ``count``, if it is valid, finite,
-        plausible and stamped at most ``max_sample_lead`` ahead, else None."""
-        last = self._last_count[stream.prefix]
-        self._last_count[stream.prefix] = count
+        plausible and stamped in time (module documentation), else None."""
+        prefix = stream.prefix
+        last = self._last_count[prefix]
+        self._last_count[prefix] = count
         if count > last + 1:
-            self.note(f"{stream.prefix}: {count - last - 1} sample(s) arrived between two "
+            self.note(f"{prefix}: {count - last - 1} sample(s) arrived between two "
                       f"estimator steps; only the latest is fused")
         if stream.valid and not getattr(self, stream.valid):
             return None
-        sample = {name: float(getattr(self, name)) for name in stream.fields}
+        sample = dict(zip(stream.fields, map(float, stream.read(self)), strict=True))
         if not all(map(math.isfinite, sample.values())):
             bad = {name: value for name, value in sample.items() if not math.isfinite(value)}
             self._ignore(stream, f"non-finite sample ignored {bad}")
             return None
-        lead = sample[stream.time] - self.time
+        stamp = sample[stream.time]
+        lead = stamp - self.time
         if lead > self.params.max_sample_lead:
-            self._ignore(stream, f"sample stamped {lead:.4g} s ahead of the clock (more than "
-                                 f"max_sample_lead) refused")
-            return None
+            return self._refuse(stream, f"sample stamped {lead:.4g} s ahead of the clock (more "
+                                        f"than max_sample_lead) refused")
+        if -lead > self.params.max_sample_delay:
+            return self._refuse(stream, f"sample stamped {-lead:.4g} s behind the clock (more "
+                                        f"than max_sample_delay): stale, refused")
+        if stamp < self._last_stamp[prefix]:
+            return self._refuse(stream, f"sample stamped {stamp!r} s, before the stream's last "
+                                        f"sample ({self._last_stamp[prefix]!r} s): refused")
         for name, source, bound in stream.bounds:
             value = sample[name]
             if abs(value) > bound:
                 self.refuse_implausible(self.aid[source], value, bound)
                 return None
-        if stream.prefix in self._held:
-            self.note(f"{stream.prefix}: a held sample was replaced before it was due")
+        if prefix in self._held:
+            self.note(f"{prefix}: a held sample was replaced before it was due")
         if lead > 0.0:
             self._step_flags |= STEP_BITS.SAMPLE_HELD
-        self._seen.add(stream.prefix)
+        self._seen.add(prefix)
+        self._last_stamp[prefix] = stamp
         return sample
+
+    def _refuse(self, stream: Stream, message: str) -> None:
+        """Refuse a sample of ``stream`` for its time stamp: counted in its source's
+        rejections, flagged and noted; returns None (no sample)."""
+        self.aid[stream.prefix].refused()
+        self.n_rejected += 1
+        self._step_flags |= STEP_BITS.SAMPLE_REFUSED
+        self.note(f"{stream.prefix}: {message}")
 
     def _ignore(self, stream: Stream, message: str) -> None:
         self.n_ignored += 1

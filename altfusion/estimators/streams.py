@@ -7,6 +7,7 @@ A sensor stream is a group of inputs named by the signal contract: the held samp
 
 from dataclasses import dataclass
 from functools import cached_property
+from operator import attrgetter
 
 from altfusion.estimators.health import HEIGHT_SOURCES, SOURCES
 
@@ -35,6 +36,11 @@ class Stream:
     def fields(self) -> tuple[str, ...]:
         """The inputs a sample carries: the values, then the time stamp."""
         return (*self.values, self.time)
+
+    @cached_property
+    def read(self) -> attrgetter:
+        """The getter of a sample's :attr:`fields` from an object: a tuple of their values."""
+        return attrgetter(*self.fields)
 
     @cached_property
     def bounds(self) -> tuple[tuple[str, str, float], ...]:
