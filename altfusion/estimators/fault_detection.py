@@ -74,12 +74,15 @@ def bias_test(source: AidSource, heights: Iterable[AidSource], now: float, timeo
     half_width = sigmas * math.sqrt(max(variance, 0.0))
     window.add(now, min(max(innovation, -half_width), half_width), variance, timeout)
     window.sigmas = threshold = min(sigmas, BIAS_SIGMAS)
+    if window.n < BIAS_MIN_SAMPLES:
+        source.biased = False
+        return False
     mean, spread = window.mean(), math.sqrt(window.mean_variance())
     if source.isolated:
-        biased = window.n >= BIAS_MIN_SAMPLES and abs(mean) > READMIT_SIGMAS * spread
+        biased = abs(mean) > READMIT_SIGMAS * spread
     else:
         level = READMIT_SIGMAS if source.biased else threshold
-        biased = window.n >= BIAS_MIN_SAMPLES and abs(mean) > level * spread and any(
+        biased = abs(mean) > level * spread and any(
             other is not source and now - other.last_fused <= timeout
             and agrees(other, level, mean, spread) for other in heights)
     source.biased = biased

@@ -128,7 +128,8 @@ def predict_constant_acceleration(x: Vector, P: Matrix, dt: float, Q: Matrix,
     of P only gains their block of Q, and their covariances with the first three move by F₃.
     With such states Q is given over all of them (n x n).
 
-    P and Q must be symmetric; P⁻ is, exactly (its upper triangle is mirrored)."""
+    P and Q must be symmetric; P⁻ is, exactly (its upper triangle is mirrored, and the
+    constant states' block P + Q is the same float on either side of the diagonal)."""
     h, v, a = x[:3]
     (p00, p01, p02), (_, p11, p12), (_, _, p22) = (row[:3] for row in P[:3])
     half = dt * dt / 2.0
@@ -147,17 +148,13 @@ def predict_constant_acceleration(x: Vector, P: Matrix, dt: float, Q: Matrix,
     if len(x) == 3:
         return x_new, ((m00, m01, m02), (m01, m11, m12), (m02, m12, m22))
     extra = range(3, len(x))
-    cross = [(P[0][k] + dt * P[1][k] + half * P[2][k] + Q[0][k],     # rows of F₃ times the
-              P[1][k] + dt * P[2][k] + Q[1][k],                      # constant states'
-              P[2][k] + Q[2][k]) for k in extra]                     # columns
-    rows = [[m00, m01, m02], [m01, m11, m12], [m02, m12, m22]]
-    for i in range(3):
-        rows[i].extend(column[i] for column in cross)
-    for k in extra:
-        rows.append([*cross[k - 3], *(P[k][j] + Q[k][j] for j in extra)])
-    for k in extra:                                     # mirror the constant states' block
-        for j in range(3, k):
-            rows[k][j] = rows[j][k]
+    P0, P1, P2 = P[0], P[1], P[2]
+    c0 = [P0[k] + dt * P1[k] + half * P2[k] + Q[0][k] for k in extra]   # rows of F₃ times
+    c1 = [P1[k] + dt * P2[k] + Q[1][k] for k in extra]                  # the constant
+    c2 = [P2[k] + Q[2][k] for k in extra]                               # states' columns
+    rows = [[m00, m01, m02, *c0], [m01, m11, m12, *c1], [m02, m12, m22, *c2]]
+    rows += [[c0[i], c1[i], c2[i], *[P[k][j] + Q[k][j] for j in extra]]
+             for i, k in enumerate(extra)]
     return (*x_new, *x[3:]), rows
 
 
@@ -250,23 +247,26 @@ def update_scalar(x: Vector, P: Matrix, H: Sequence[tuple[int, float]], innovati
 
 def _times_row(P: Matrix, H: Sequence[tuple[int, float]]) -> list[float]:
     """P Hᵀ for a sparse row H: each entry the sum of H's terms from 0 in H's order (the
-    float :func:`sum` gives), written out for one and two terms (the common rows)."""
+    float :func:`sum` gives), written out for rows of up to four terms."""
     if len(H) == 1:
         (i, h), = H
         return [0.0 + h * P_a[i] for P_a in P]
     if len(H) == 2:
         (i, h), (j, g) = H
         return [0.0 + h * P_a[i] + g * P_a[j] for P_a in P]
+    if len(H) == 3:
+        (i, h), (j, g), (k, f) = H
+        return [0.0 + h * P_a[i] + g * P_a[j] + f * P_a[k] for P_a in P]
+    if len(H) == 4:
+        (i, h), (j, g), (k, f), (m, e) = H
+        return [0.0 + h * P_a[i] + g * P_a[j] + f * P_a[k] + e * P_a[m] for P_a in P]
     return [sum(h * P_a[i] for i, h in H) for P_a in P]
 
 
 def sparse_dot(v: Vector, H: Sequence[tuple[int, float]]) -> float:
     """H v for a sparse row H ((state index, coefficient) pairs), summed from 0 in H's order
     (the float :func:`sum` gives; :func:`_times_row` sums the same way)."""
-    if len(H) == 1:
-        (i, h), = H
-        return 0.0 + h * v[i]
-    if len(H) == 2:
-        (i, h), (j, g) = H
-        return 0.0 + h * v[i] + g * v[j]
-    return sum(h * v[i] for i, h in H)
+    total = 0.0
+    for i, h in H:
+        total += h * v[i]
+    return total
