@@ -24,39 +24,32 @@ Deviations from the paper:
   false (default) takes the physical sign s = -1; true restores eq. (6), s = +1.
 * GPS gate: a z-update whose innovation exceeds ``gate_sigma`` standard deviations
   √(P^b + R + (h^GPS - H0)² P^a) is rejected.
-* Baro gate (with ``fault_detection``; without it the baro is ungated, as in the paper): the
-  compensated height h^c (eq. 32, with the calibration â, b̂ before this step's z-update)
-  against the alpha-beta prediction ĥ_{k|k-1} of eq. (33), S = P^h_{k|k-1} + R_h (R_h of eq.
-  34, P^h that of ``h_std`` below), at ``gate_sigma``. The filter starts on the first h^c,
-  so its error variance starts at that sample's R_h, which holds the calibration's prior
-  P^b_00: a replayed PX4 log's baro, 155 m off the GPS datum, moves h^c by 155 m as the
-  first GPS samples calibrate b̂, within the gate (with the paper's P0_h, 10² m², as the
-  start variance every such sample was rejected). While the baro is rejected, z = h^B -
-  h^GPS (eq. 23) has no valid h^B: the GPS height is fused into the alpha-beta filter
-  instead (eq. 34 with R^GPS), so the GPS aids the height and the shared isolation logic
-  (estimators/base.py) can isolate the baro; an isolated baro whose innovations keep one
-  sign is re-admitted with b̂ moved onto it (``reset_offset``: b̂ += (1 + â)·(h^c -
-  ĥ_{k|k-1})), a height reset moves ĥ. The paper's Q_b (400 m² per air-data step: whang2008's
-  weather) widens R_h so fast that a 200 m baro step passes the gate after 0.15 s and is
-  absorbed by b̂ (whang2008 reproduction unchanged: its run 0 reference matches); with a
-  flight's true, small bias walk (the fault flight: ``systems.faults.TRUE_NOISE``) a failed
-  baro is isolated 2.5 s after it steps and re-admitted on its new bias 2.5 s later.
 * ``MIN_LEVER``: below 1 m of h^GPS - H0 the scale-factor update of eqs. (23)-(26) is skipped
   (z_a = (z - b̂)/(h^GPS - H0) would divide by a vanishing lever); the bias update runs.
 * GPS samples that arrive before the first air-data sample are not fused (z needs h^B; in a
   replayed log GPS may come first).
 * Health (estimators/base.py): the GPS calibrates the baro and does not aid the height,
-  except while the baro is rejected (the baro gate above).
-* h_std (with ``fault_detection``; the estimate is the paper's either way): eq. (34) fuses
-  R_h = R^B' + C as white noise, C = ((h^c - H0)² P^a + P^b)/(1 + â)² the variance of the
-  calibration â, b̂; but â and b̂ change at GPS samples only, so the N air-data samples
-  between two GPS samples (N = GPS interval / air-data interval, from the time stamps)
-  share one calibration error, which the filter averages down as if independent: h_std was
-  overconfident (coverage of |e| <= 2 h_std 0.80 in whang2008's scenario). ``h_std`` is the
-  error covariance of the filter's own gain K under the equivalent white noise of that
-  shared error, R^B' + N·C (``kalman.joseph``), from the first sample's R_h (the start
-  above): coverage 0.99 in whang2008's scenario (N = 5), 0.98 on the fault suite's flight
-  (N = 2).
+  except while the baro is rejected (the fault layer's baro gate below).
+
+The fault layer (``fault_detection`` true; the estimate is the paper's without it), not in
+the paper; ``docs/estimators.md`` gives the cases behind it:
+
+* baro gate: the compensated height h^c (eq. 32, with the calibration â, b̂ before this
+  step's z-update) against the alpha-beta prediction ĥ_{k|k-1} of eq. (33),
+  S = P^h_{k|k-1} + R_h (R_h of eq. 34, P^h that of ``h_std`` below), at ``gate_sigma``. The
+  filter's error variance starts at the first sample's R_h, which holds the calibration's
+  prior P^b_00. While the baro is rejected, z = h^B - h^GPS (eq. 23) has no valid h^B: the
+  GPS height is fused into the alpha-beta filter instead (eq. 34 with R^GPS), so the GPS aids
+  the height and the shared isolation (:mod:`~altfusion.estimators.fault_detection`) can
+  isolate the baro; an isolated baro whose innovations keep one sign is re-admitted with b̂
+  moved onto it (``reset_offset``: b̂ += (1 + â)·(h^c - ĥ_{k|k-1})), a height reset moves ĥ;
+* ``h_std``: eq. (34) fuses R_h = R^B' + C as white noise, C = ((h^c - H0)² P^a + P^b)/(1 + â)²
+  the variance of the calibration â, b̂; but â and b̂ change at GPS samples only, so the N
+  air-data samples between two GPS samples (N = GPS interval / air-data interval, from the
+  time stamps) share one calibration error, which the filter would average down as if
+  independent. ``h_std`` is the error covariance of the filter's own gain K under the
+  equivalent white noise of that shared error, R^B' + N·C (``kalman.joseph``), from the first
+  sample's R_h.
 """
 
 from dataclasses import dataclass

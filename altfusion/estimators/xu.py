@@ -49,8 +49,7 @@ Deviations from the paper (the reasons in docs/estimators.md):
 * health (estimators/base.py): a height source rejected for ``reset_timeout`` while another
   agrees is isolated; with no source fused for that long the height resets; an isolated
   barometer with a constant offset is re-admitted with ε_b reset onto it (:meth:`reset_offset`;
-  a baro stepped by 200 m above the laser's range: 5.4 m RMS on the 30 m GNSS alone, 1.0 m
-  re-admitted, on the fault suite's flight).
+  docs/estimators.md).
 
 Scenarios (Section 3): profiles ``xu_hover15``, ``xu_hover35`` and ``xu_multipoint`` (bounds of
 Section 3.2: error ≤ 1 m below 25 m, ≤ 1.2 m above, 1.1 / 1.5 m with wind grade 3); realistic
