@@ -239,9 +239,9 @@ def update_scalar(x: Vector, P: Matrix, H: Sequence[tuple[int, float]], innovati
     S = sparse_dot(row, H) + variance
     K = [r / S for r in row]
     x_new = [xa + ka * innovation for xa, ka in zip(x, K, strict=True)]
-    P_new = [[p_ab - (k_a * r_b + r_a * k_b) + k_a * k_b * S
-              for p_ab, r_b, k_b in zip(P_a, row, K, strict=True)]
-             for P_a, r_a, k_a in zip(P, row, K, strict=True)]
+    P_new = [[p_ab - (k_a * r_b + r_a * k_b) + k_a * k_b * S          # equal lengths by
+              for p_ab, r_b, k_b in zip(P_a, row, K, strict=False)]   # construction: zip's
+             for P_a, r_a, k_a in zip(P, row, K, strict=False)]       # check costs 20 %
     return x_new, P_new, S
 
 
