@@ -5,14 +5,14 @@
 The inputs an estimator sees in a system (default: YangFusionKF in ``yang2020``, AltitudeEKF
 in ``yang2020_altitude_ekf``: 100 Hz steps, baro and accelerometer at every step, GNSS at
 10 Hz, radio altimeter at 5 Hz) are recorded once, running the system's FMUs (``models/``
-must be built; any version will do: both versions step the same recorded inputs). Each version then steps a fresh estimator core over
-them, in a process of its own that imports that version's ``altfusion`` (``--base``: the
-root of another checkout, e.g. ``git worktree add --detach /tmp/base 6300b44``), and reports
-the best of ``--repeat`` runs: the CPU time (``time.process_time``: the time the process
-waits for a core is left out) of a loop writing the inputs and stepping (``do_step`` and
-``take_notes``, as the FMU adapter calls them), less that of the same loop writing the inputs
-only, over the steps. Timings on a shared machine still move by ±10 %: compare versions
-within one run.
+must be built; any version will do: both versions step the same recorded inputs). Each
+version then steps a fresh estimator core over them, in a process of its own that imports
+that version's ``altfusion`` (``--base``: the root of another checkout, e.g.
+``git worktree add --detach /tmp/base 6300b44``), and reports the best of ``--repeat`` runs:
+the CPU time (``time.process_time``: the time the process waits for a core is left out) of a
+loop writing the inputs and stepping (``do_step`` and ``take_notes``, as the FMU adapter
+calls them), less that of the same loop writing the inputs only, over the steps. Timings on
+a shared machine still move by ±10 %: compare versions within one run.
 """
 
 import argparse
