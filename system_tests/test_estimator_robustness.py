@@ -234,7 +234,7 @@ CORES = {"BaselineKF": BaselineKF, "HajiyevAdaptiveEstimator": HajiyevAdaptiveEs
 WILD_SAMPLES = [
     (name, value_name, value, counter) for name in ESTIMATORS for value_name, value, counter in (
         ("baro_h", 1100.0, None), ("baro_h", 1e308, "baro_rejected"),
-        ("gps_time", 1e308, "n_ignored"), ("acc_z", 1000.0, "acc_rejected"),
+        ("gps_time", 1e308, "gps_rejected"), ("acc_z", 1000.0, "acc_rejected"),
         ("gps_vz", 100.0, "gps_vz_rejected"), ("radar_h", 1100.0, "radar_rejected"))
     if value_name in CORES[name].declared_inputs()
     and (name, value_name, value) != ("WhangGAEstimator", "baro_h", 1100.0)

@@ -18,6 +18,7 @@ import pytest
 from altfusion.errors import ParameterError
 from altfusion.estimators.altitude_ekf import AltitudeEKF
 from altfusion.estimators.base import SourceBit, source_bit
+from altfusion.estimators.health import UNKNOWN_STD
 
 sys.path.insert(0, str(Path(__file__).parent))
 from stream_feeder import StreamFeeder  # noqa: E402
@@ -173,6 +174,22 @@ def test_silent_sensors_turn_h_valid_false_within_aiding_timeout():
     flight.fly(8.0, baro=None, gps=None, record=rows)
     first_invalid = next(r[0] for r in rows if not r[3])
     assert 10.0 + 5.0 - STEP <= first_invalid <= 10.0 + 5.0 + STEP
+
+
+def test_h_std_is_the_unknown_maximum_until_initialized():
+    """Before its first height sample AltitudeEKF knows nothing of the height: h_std is
+    UNKNOWN_STD (1e5 m) with h_valid false (issue 30: it reported 0 m, perfect certainty),
+    accelerometer samples or not; the first baro sample starts it with that sample's variance
+    plus its offset's prior (the GNSS is the height reference: the baro reads h + d)."""
+    flight = Flight()
+    ekf = flight.ekf
+    assert ekf.h_std == UNKNOWN_STD and not ekf.h_valid
+    flight.fly(1.0, baro=None, gps=None)
+    assert ekf.h_std == UNKNOWN_STD and not ekf.h_valid and not ekf.started
+    flight.fly(STEP, gps=None)
+    assert ekf.started and ekf.h_valid
+    assert ekf.h_std == pytest.approx(math.hypot(NOISE["baro_noise"], ekf.params.P0_offset**0.5),
+                                      rel=1e-9)
 
 
 def test_accelerometer_bias_learnt_to_0_03_in_60_s():

@@ -7,7 +7,7 @@ import pytest
 from stream_feeder import StreamFeeder
 
 from altfusion.errors import ParameterError
-from altfusion.estimators.base import SourceBit, source_bit
+from altfusion.estimators.base import SourceBit, Status, source_bit
 from altfusion.estimators.baseline import BaselineKF, BaselineKFParams
 from altfusion.estimators.hajiyev import HajiyevAdaptiveEstimator, HajiyevParams
 from altfusion.estimators.whang import WhangGAEstimator, WhangParams
@@ -81,6 +81,25 @@ def test_gps_without_fix_is_not_fused(cls):
         feeder.step(**baro_gps(baro=100.0, gps=100.0))
     feeder.step(**baro_gps(baro=100.0, gps=5000.0, fix=False))
     assert feeder.estimator.h_est == pytest.approx(100.0, abs=1.0)
+
+
+@pytest.mark.parametrize("cls", ESTIMATORS)
+def test_a_gnss_sample_stamped_10_s_in_the_past_is_refused_and_counted(cls):
+    """Issue 30: a GNSS sample stamped 10 s before the estimator's clock was fused as if
+    current and counted nowhere. It is refused (more than max_sample_delay, 3 s, old):
+    counted in gps_rejected, flagged SAMPLE_REFUSED, and the estimate is exactly that of a
+    twin that never received it."""
+    feeder, twin = StreamFeeder(cls(step_size=0.2)), StreamFeeder(cls(step_size=0.2))
+    for k in range(100):
+        for f in (feeder, twin):
+            f.step(**baro_gps(baro=100.0, gps=100.0 if k % 5 == 4 else None))
+    stale = baro_gps(baro=100.0)
+    stale["gps"] = {"gps_h": 103.0, "gps_time": feeder.estimator.time + 0.2 - 10.0}
+    feeder.step(**stale)
+    twin.step(**baro_gps(baro=100.0))
+    e = feeder.estimator
+    assert e.gps_rejected == e.n_rejected == 1 and e.status & Status.SAMPLE_REFUSED
+    assert (e.h_est, e.h_std) == (twin.estimator.h_est, twin.estimator.h_std)
 
 
 @pytest.mark.parametrize(("cls", "params", "name"), [

@@ -2,7 +2,8 @@
 
 from dataclasses import dataclass, replace
 
-from altfusion.estimators.base import SourceBit, Status, stream_inputs, stream_sources
+from altfusion.estimators.health import SourceBit, Status
+from altfusion.estimators.streams import stream_inputs, stream_sources
 from altfusion.signals import SIGNALS
 
 
