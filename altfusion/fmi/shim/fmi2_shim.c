@@ -49,6 +49,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 #include <wchar.h>
 
 /* glibc >= 2.34 versions the dl* functions anew; bind the x86-64 baseline versions so the
@@ -319,8 +320,8 @@ static int python_alive(void) {
     return Py_IsInitialized();
 }
 
-#define FINALIZED "the Python interpreter of this process has been finalized (the host calls " \
-    "after its exit began): nothing that needs Python can run"
+#define FINALIZED "the Python interpreter of this process has been finalized, and this call " \
+    "needs it"
 
 /* The interpreter this shim starts lives in a thread of its own, which starts it and, when
  * asked, finalizes it: Python finalizes cleanly only in the thread that started it or one
@@ -331,6 +332,8 @@ static pthread_cond_t interpreter_changed = PTHREAD_COND_INITIALIZER;
 enum { NOT_STARTED, RUNNING, FINALIZE, FINALIZED_NOW };
 static int interpreter_phase = NOT_STARTED;
 static pthread_t interpreter_thread;
+static pid_t interpreter_process;   /* a forked child has no interpreter thread: it never
+                                     * finalizes */
 
 static void set_phase(int phase) {
     pthread_mutex_lock(&interpreter_lock);
@@ -347,7 +350,7 @@ static void wait_for_phase(int phase) {
 
 static void finalize_interpreter(void) {
     pthread_mutex_lock(&interpreter_lock);
-    int running = interpreter_phase == RUNNING;
+    int running = interpreter_phase == RUNNING && getpid() == interpreter_process;
     if (running) {
         interpreter_phase = FINALIZE;
         pthread_cond_broadcast(&interpreter_changed);
@@ -379,6 +382,7 @@ static void* interpreter_main(void* unused) {
 }
 
 static int start_interpreter(void) {
+    interpreter_process = getpid();
     if (pthread_create(&interpreter_thread, NULL, interpreter_main, NULL) != 0) return 0;
     wait_for_phase(RUNNING);
     shared = &own_count;
@@ -647,7 +651,7 @@ EXPORT fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String 
     return inst;
 }
 
-/* Keep a healthy instance for reuse (1), unless exit has begun (0). */
+/* Keep a healthy instance for reuse (1); never once release_pythonfmu ran (0). */
 static int pool_instance(Instance* inst) {
     inst->worst = fmi2OK;
     if (released || inst->broken || pythonfmu.fmi2Reset(inst->inner) != fmi2OK
