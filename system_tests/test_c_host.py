@@ -4,7 +4,8 @@ YangFusionKF: it exits with status 0 on every ``file:`` resource URI form (the F
 to a folder whose name needs a percent-escape), and every failure reaches its logger while
 ``loggingOn`` is off: a refused state (fmi2DeSerializeFMUstate returns fmi2Error), a bad
 parameter (fmi2ExitInitializationMode returns fmi2Error), a resource location that is not a
-local file URI (fmi2Instantiate returns NULL)."""
+local file URI (fmi2Instantiate returns NULL). Teardown in any order: instances freed by the
+host's exit handler, calls after the host finalized its own interpreter."""
 
 import math
 import os
