@@ -111,6 +111,17 @@ class _Stepped:
         """The (buffer, slot) holding the output a link reads."""
         return self.outputs[link.kind], link.slot
 
+    def input_source(self, path: str) -> tuple[Any, int] | None:
+        """The (buffer, slot) holding the value input ``path`` was given in the last step:
+        its latch, or its feedthrough source's output; None if no connection drives it."""
+        for position, (_, _, link) in enumerate(self.delayed):
+            if link.end == path:
+                return self._latched, position
+        for _, _, link in self.feedthrough:
+            if link.end == path:
+                return link.source.source(link)
+        return None
+
     def refresh_outputs(self) -> None:
         """Read the outputs other components use (every step of this component)."""
         for read in self._linked_reads:
@@ -245,14 +256,11 @@ class Simulation:
         input the value the runner gives it (latched, or its feedthrough source's)."""
         if slot >= 0:
             return stepped.outputs[kind], slot
-        for position, (_, _, link) in enumerate(stepped.delayed):
-            if link.end == path:
-                return stepped._latched, position
-        for _, _, link in stepped.feedthrough:
-            if link.end == path:
-                return link.source.source(link)
-        raise CosimError(f"'{path}': no connection drives this input; only connected inputs "
-                         f"can be recorded")
+        source = stepped.input_source(path)
+        if source is None:
+            raise CosimError(f"'{path}': no connection drives this input; only connected "
+                             f"inputs can be recorded")
+        return source
 
     def _resolve_connections(self) -> None:
         driven: set[str] = set()
