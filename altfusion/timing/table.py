@@ -13,6 +13,7 @@ Layouts (the first column is always the time):
 """
 
 import csv
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -66,7 +67,9 @@ def read_result(path: Path, components: set[str]) -> ResultTable:
         raise UsageError(f"{path}: unknown column layout (first column {header[:1]!r}; "
                          f"expected {' or '.join(repr(h) for h in TIME_HEADERS)})")
     try:
-        data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+        with warnings.catch_warnings():             # no rows: said below, in one line
+            warnings.simplefilter("ignore", UserWarning)
+            data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
     except ValueError as error:
         raise UsageError(f"{path}: not a result table ({error})") from None
     if data.shape[0] == 0 or data.shape[1] != len(header):
