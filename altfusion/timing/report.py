@@ -12,7 +12,7 @@ def _seconds(value: float) -> str:
 def _spread(spread: Spread | None) -> str:
     if spread is None:
         return "-"
-    if spread.low == spread.high:
+    if f"{spread.low:.4g}" == f"{spread.high:.4g}":
         return _seconds(spread.low)
     return f"{spread.low:.4g} .. {spread.high:.4g} s (mean {spread.mean:.4g})"
 
