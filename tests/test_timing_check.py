@@ -187,3 +187,13 @@ def test_instants_are_exact_and_start_strictly_after_the_start_time():
     assert schedule.last_due_index(1.0) == 9
     on_grid, inside = schedule.delivered_by(np.array([0.15, 0.2]))   # steps from 0.05 s
     assert on_grid == pytest.approx(0.15) and inside == pytest.approx(0.25)
+
+
+def test_one_host_step_for_every_component_sets_the_delivery_and_hand_over_allowed():
+    s = stream(step=0.01, handover=0.01)
+    time, columns = recorded(s, seen_after_rows=5)                # 0.05 s later
+    assert "samples estimator.gps_count saw late (hand-over over 0.01 s)" in kinds(
+        check_stream(s, time, columns))
+    result = check_stream(s, time, columns, step=0.05)
+    assert result.ok, result.violations
+    assert result.consumers[0].allowed == pytest.approx(0.05)

@@ -24,7 +24,7 @@ Times are compared with a tolerance of :data:`TIME_TOLERANCE` (hosts add floats 
 """
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from fractions import Fraction
 
 import numpy as np
@@ -202,7 +202,8 @@ def _samples(result: StreamResult, schedule: Schedule, time: np.ndarray, count: 
 def check_stream(stream: Stream, time: np.ndarray, columns: dict[str, np.ndarray],
                  step: float | None = None) -> StreamResult:
     """Check ``stream`` on rows ``time`` (s, increasing, the first at the start) and the
-    recorded ``columns``; ``step`` overrides the steps the host took (every component's)."""
+    recorded ``columns``; ``step``: the one step the host took for every component (default:
+    each component's own step)."""
     count, stamp = columns.get(stream.count_column), columns.get(stream.time_column)
     result = StreamResult(stream, count is not None and stamp is not None)
     if not result.recorded:
@@ -239,8 +240,10 @@ def check_stream(stream: Stream, time: np.ndarray, columns: dict[str, np.ndarray
     if shown.size:
         result.delay = Spread.of(shown - instants)
         result.allowed_delay = (float(stream.latency), float((allowed - instants).max()))
+    consumers = stream.consumers if step is None else tuple(
+        replace(c, handover=step * (len(c.relays) + 1)) for c in stream.consumers)
     result.consumers = [_check_consumer(result, consumer, time, count, other.get(
-        consumer.column), instants, shown, allowed) for consumer in stream.consumers]
+        consumer.column), instants, shown, allowed) for consumer in consumers]
     return result
 
 
