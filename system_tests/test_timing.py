@@ -86,7 +86,9 @@ def test_ecos_shows_a_slow_sensors_samples_before_they_are_taken(ssp_files, caps
     status, out, _ = timing([ssp_files["yang2020"], "--stop", STOP, "--engine", "ecos"],
                             capsys)
     assert status == 1
-    assert "2 violation(s) in 2 of 4 streams:" in out
+    assert "4 violation(s) in 2 of 4 streams:" in out
+    assert cells(out, "gnss.gps", "estimator.gps_count") == [
+        "estimator.gps_count", "saw 200 of 200, latency -0.09 s", "<= 0.01 s", "FAIL"]
     assert "gnss.gps: 200 samples shown before they were due (instant + latency): instant " \
            "0.1 s shown at 0.01 s" in out
     assert "radar.radar: 100 samples shown before they were due" in out

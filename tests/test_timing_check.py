@@ -134,8 +134,10 @@ def test_a_sample_shown_before_its_instant_is_early():
     for name in (s.count_column, s.time_column, "estimator.gps_count"):
         columns[name] = np.r_[columns[name][9:], np.repeat(columns[name][-1], 9)]
     result = check_stream(s, time, columns)
-    assert "samples shown before they were due (instant + latency)" in kinds(result)
+    assert kinds(result) == {"samples shown before they were due (instant + latency)",
+                             "samples estimator.gps_count saw before they were due"}
     assert result.delay.low == pytest.approx(-0.09)
+    assert result.early == result.consumers[0].early == 20
 
 
 def test_latency_and_offset_move_the_due_rows():

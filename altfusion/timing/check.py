@@ -17,7 +17,7 @@ contains that time; its ``<prefix>_count`` rises by the number of samples delive
 * each consumer's input count reaches it no later than the row at or after the time it
   showed plus the consumer's hand-over time (:attr:`~.streams.Consumer.handover`), never
   ahead of the sensor's output; its latency is the time from the sample's instant to that
-  row.
+  row, never less than the declared latency.
 
 Times are compared with a tolerance of :data:`TIME_TOLERANCE` (hosts add floats and print
 12-17 digits).
@@ -114,6 +114,7 @@ class ConsumerResult:
     seen: int = 0
     pending: int = 0
     """Samples shown too close to the last row for the hand-over to show."""
+    early: int = 0
     late: int = 0
     never: int = 0
     latency: Spread | None = None
@@ -276,10 +277,15 @@ def _check_consumer(result: StreamResult, consumer: Consumer, time: np.ndarray,
                    [f"instant {t:.9g} s shown at {s:g} s, seen at {a:g} s" for t, s, a in
                     zip(instants[late], shown[late], at[late], strict=True)])
     latency = at - instants
+    early = latency < float(result.stream.latency) - TIME_TOLERANCE
+    result.violate(f"samples {name} saw before they were due",
+                   [f"instant {t:.9g} s seen at {a:g} s" for t, a in
+                    zip(instants[early], at[early], strict=True)])
     limit = _row_at_or_after(time, delivered_by + consumer.handover) - instants
     limit = limit[np.isfinite(limit)]
     return ConsumerResult(
         consumer, True, seen=int(np.isfinite(at).sum()), pending=int(
-            (np.isnan(at) & ~np.isfinite(allowed)).sum()), late=int(late.sum()),
+            (np.isnan(at) & ~np.isfinite(allowed)).sum()), early=int(early.sum()),
+        late=int(late.sum()),
         never=int(never.sum()), latency=Spread.of(latency[np.isfinite(latency)]),
         allowed=float(limit.max()) if limit.size else 0.0)
