@@ -105,6 +105,42 @@ def test_ecos_keeps_every_streams_timing_with_every_sensor_at_the_base_step(
     assert_every_stream_holds(status, out)
 
 
+def test_run_record_timing_writes_what_timing_checks_every_base_step(ssp_files, tmp_path,
+                                                                     capsys):
+    assert main(["run", str(ssp_files["yang2020"]), "--stop", "5", "--record", "timing",
+                 "--out", str(tmp_path)]) == 0
+    results = Results.from_csv(tmp_path / "yang2020.csv")
+    assert results.time.size == 501                                  # every 0.01 s
+    for stream in STREAMS:
+        prefix = stream.split(".")[1]
+        for column in (f"{stream}_count", f"{stream}_time", f"estimator.{prefix}_count"):
+            assert column in results.columns
+    assert "estimator.h_est" in results.columns                     # the system's own record
+    capsys.readouterr()
+    status, out, _ = timing([tmp_path / "yang2020.csv", "--system", ssp_files["yang2020"]],
+                            capsys)
+    assert_every_stream_holds(status, out)
+
+
+def test_a_result_without_counts_names_the_option_that_records_them(ssp_files, tmp_path,
+                                                                    capsys):
+    assert main(["run", str(ssp_files["yang2020"]), "--stop", "1", "--out",
+                 str(tmp_path)]) == 0
+    capsys.readouterr()
+    status, out, err = timing([tmp_path / "yang2020.csv", "--system", ssp_files["yang2020"]],
+                              capsys)
+    assert (status, out) == (2, "")
+    assert err.startswith("error: the result records no sample count and stamp") and \
+        err.strip().endswith("run it with altfusion run --record timing")
+
+
+def test_a_result_file_without_its_system_is_a_one_line_error(our_csv, capsys):
+    status, out, err = timing([our_csv], capsys)
+    assert (status, out) == (2, "")
+    assert err == f"error: {our_csv}: a result file needs --system SYSTEM.ssp (the system it " \
+                  f"is a result of)\n"
+
+
 def _edited(source: Path, target: Path, edit) -> Path:
     results = Results.from_csv(source)
     edit(results.columns)
