@@ -165,6 +165,7 @@ def test_a_sample_removed_from_a_result_file_is_reported(ssp_files, our_csv, tmp
     assert "air_data.baro: 1 samples late or lost: instant 5.01 s shown at 5.02 s, due in " \
            "the row at 5.01 s" in out
     assert "air_data.baro: 1 rows where estimator.baro_count is ahead" in out
+    assert cells(out, "air_data.baro", "estimator.baro_count")[-1] == "FAIL"
 
 
 def test_an_altered_stamp_in_a_result_file_is_reported(ssp_files, our_csv, tmp_path, capsys):

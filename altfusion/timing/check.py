@@ -114,6 +114,8 @@ class ConsumerResult:
     seen: int = 0
     pending: int = 0
     """Samples shown too close to the last row for the hand-over to show."""
+    ahead: int = 0
+    """Rows in which the consumer's count is ahead of the sensor's."""
     early: int = 0
     late: int = 0
     never: int = 0
@@ -134,6 +136,8 @@ class StreamResult:
     seen: int = 0
     gaps: int = 0
     duplicated: int = 0
+    ahead: int = 0
+    """Rows in which the consumer's count is ahead of the sensor's."""
     early: int = 0
     late: int = 0
     stamp_error: float = 0.0
@@ -285,7 +289,7 @@ def _check_consumer(result: StreamResult, consumer: Consumer, time: np.ndarray,
     limit = limit[np.isfinite(limit)]
     return ConsumerResult(
         consumer, True, seen=int(np.isfinite(at).sum()), pending=int(
-            (np.isnan(at) & ~np.isfinite(allowed)).sum()), early=int(early.sum()),
-        late=int(late.sum()),
+            (np.isnan(at) & ~np.isfinite(allowed)).sum()), ahead=int(ahead.size),
+        early=int(early.sum()), late=int(late.sum()),
         never=int(never.sum()), latency=Spread.of(latency[np.isfinite(latency)]),
         allowed=float(limit.max()) if limit.size else 0.0)

@@ -50,7 +50,7 @@ def _consumer_row(consumer: ConsumerResult, shown: int) -> tuple[str, str, str, 
     measured = (f"saw {consumer.seen} of {shown}{pending}, latency "
                 f"{_spread(consumer.latency)}")
     return (label, measured, f"<= {consumer.allowed:.4g} s",
-            _verdict(consumer.early or consumer.late or consumer.never))
+            _verdict(consumer.ahead or consumer.early or consumer.late or consumer.never))
 
 
 def format_stream(result: StreamResult) -> str:
