@@ -6,12 +6,14 @@ accelerometer) to keep CI cheap; the checks are exact, so a short run judges as 
 one."""
 
 import csv
+import os
 import re
 import subprocess
 import sys
 import tarfile
 import zipfile
 from dataclasses import replace
+from fractions import Fraction
 from pathlib import Path
 
 import numpy as np
@@ -21,7 +23,13 @@ from altfusion.cli import main
 from altfusion.cosim.results import Results
 from altfusion.cosim.runner import simulate
 from altfusion.cosim.ssp import read_ssp, write_ssp
+from altfusion.cosim.system import ComponentSpec, SystemSpec
+from altfusion.estimators.baseline import BaselineKF
+from altfusion.systems.plant import plant_components, plant_connections
+from altfusion.systems.sensors import sensor_components, sensor_connections
+from altfusion.systems.wiring import estimator_connections
 from altfusion.timing.command import with_timing_record
+from altfusion.timing.streams import Consumer, sensor_streams
 
 STOP = 20.0
 STREAMS = ("air_data.baro", "gnss.gps", "accelerometer.acc", "radar.radar")
@@ -141,6 +149,46 @@ def test_a_result_file_without_its_system_is_a_one_line_error(our_csv, capsys):
                   f"is a result of)\n"
 
 
+def delayed_gnss_system(fmus: dict[str, Path], target: Path) -> Path:
+    """A GNSS receiver sampling at 0.02 + k·0.1 s and delivering 0.05 s later, and a
+    barometer at 0.05 s, on the plant's truth, fused by BaselineKF."""
+    sensors = ("air_data", "gnss")
+    parameters = {"gnss": {"sample_period": 0.1, "sample_offset": 0.02, "latency": 0.05},
+                  "air_data": {"sample_period": 0.05}}
+    components = (plant_components("yang2020") + sensor_components(sensors,
+                                                                    parameters=parameters)
+                  + (ComponentSpec("estimator", "BaselineKF", 0.01, {}),))
+    spec = SystemSpec("delayed_gnss", "a late GNSS", components,
+                      plant_connections() + sensor_connections(sensors)
+                      + estimator_connections(BaselineKF, sensors=sensors), stop_time=STOP)
+    return write_ssp(spec, fmus, target)
+
+
+def test_offset_and_latency_are_read_from_the_ssp_and_kept_in_every_host(fmus, tmp_path,
+                                                                         capsys):
+    ssp = delayed_gnss_system(fmus, tmp_path / "delayed_gnss.ssp")
+    loaded = read_ssp(ssp)
+    gnss = next(s for s in sensor_streams(loaded.spec, loaded.fmu_paths) if s.prefix == "gps")
+    assert (gnss.period, gnss.offset, gnss.latency) == (Fraction("0.1"), Fraction("0.02"),
+                                                        Fraction("0.05"))
+    for engine, latency in (("ours", "0.05 s"), ("libcosim", "0.06 s")):
+        status, out, _ = timing([ssp, "--stop", STOP, "--engine", engine], capsys)
+        assert status == 0, out
+        assert cells(out, "gnss.gps", "samples expected") == ["samples expected / seen",
+                                                              "200 / 200"]   # 0.02..19.92 s
+        assert cells(out, "gnss.gps", "delivery") == [
+            "delivery (row - instant)", "0.05 s", "0.05 .. 0.05 s", "ok"]
+        assert cells(out, "gnss.gps", "estimator.gps_count")[1].endswith(f"latency {latency}")
+
+
+def test_the_relays_of_a_fault_system_are_followed_to_the_estimator(ssp_files):
+    loaded = read_ssp(ssp_files["fault_demo_yang"])
+    streams = {s.name: s for s in sensor_streams(loaded.spec, loaded.fmu_paths)}
+    assert sorted(streams) == ["accelerometer.acc", "air_data.baro", "gnss.gps", "radar.radar"]
+    assert streams["gnss.gps"].consumers == (
+        Consumer("estimator", "gps_count", handover=0.02, relays=("fault",)),)
+
+
 def _edited(source: Path, target: Path, edit) -> Path:
     results = Results.from_csv(source)
     edit(results.columns)
@@ -248,7 +296,7 @@ def run_omsimulator(package: Path, ssp: Path, result: Path, stop: float, step: f
     """``ssp`` run in OMSimulator through its Python API, one step for every component."""
     completed = subprocess.run(
         [sys.executable, "-c", OMS_RUN, str(ssp), str(result), repr(stop), repr(step)],
-        env={"PYTHONPATH": str(package), "PATH": "/usr/bin:/bin"}, capture_output=True,
+        env={**os.environ, "PYTHONPATH": str(package)}, capture_output=True,
         text=True, timeout=600)
     assert completed.returncode == 0 and result.is_file(), \
         completed.stdout[-3000:] + completed.stderr[-3000:]
