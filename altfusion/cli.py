@@ -16,6 +16,8 @@ from altfusion.errors import ParameterError, UsageError
 from altfusion.estimators.registry import ESTIMATOR_CLASSES
 from altfusion.evaluation.command import add_command as add_evaluate_command
 from altfusion.montecarlo.commands import add_commands as add_montecarlo_commands
+from altfusion.timing.command import add_command as add_timing_command
+from altfusion.timing.command import with_timing_record
 
 INCOMPLETE = ".incomplete"
 """Suffix before '.csv'/'.png' of the results of a run that failed part way."""
@@ -42,6 +44,8 @@ def command_run(args: argparse.Namespace) -> int:
         loaded = apply_fault(args.system, loaded, args.fault)
     settings = parse_settings(loaded, args.set)
     spec = loaded.spec
+    if args.record == "timing":
+        spec = with_timing_record(spec, loaded.fmu_paths)
     out = output_folder(args.out)
     failure = None
     with Simulation(spec, loaded.fmu_paths, backend=args.backend) as simulation:
@@ -154,6 +158,9 @@ def build_parser() -> argparse.ArgumentParser:
                      help="step the FMUs (default) or their core objects directly")
     run.add_argument("--fault", default=None, metavar="NAME",
                      help="apply fault scenario NAME of the fault suite (docs/faults.md)")
+    run.add_argument("--record", choices=("timing",), default=None,
+                     help="timing: also record every sensor stream's count and stamp and "
+                          "the estimators' input counts, every base step (altfusion timing)")
     run.set_defaults(handler=command_run)
     replay = commands.add_parser(
         "replay", help="run estimators on a PX4 flight log (ULog), compare with PX4 EKF2")
@@ -176,6 +183,7 @@ def build_parser() -> argparse.ArgumentParser:
     design.set_defaults(handler=command_controller_design)
     add_montecarlo_commands(commands)
     add_evaluate_command(commands)
+    add_timing_command(commands, finite_time)
     from altfusion.reproduce import REPRODUCTIONS
 
     reproduce = commands.add_parser("reproduce",

@@ -36,10 +36,10 @@ sys.path.insert(0, sys.argv[1])
 import numpy as np
 import altfusion
 assert altfusion.__file__.startswith(sys.argv[1]), altfusion.__file__
-from altfusion.replay.system import CATALOG_ESTIMATORS
+from altfusion.estimators.registry import ESTIMATOR_CLASSES
 data = np.load(sys.argv[2])
 names = json.loads(sys.argv[3])
-core_class = CATALOG_ESTIMATORS[sys.argv[4]]
+core_class = ESTIMATOR_CLASSES[sys.argv[4]]
 params = core_class.Params(**json.loads(sys.argv[5]))
 rows = data["inputs"].tolist()
 kinds = [int if n.endswith("_count") else bool if n.endswith(("_fix", "_valid")) else float

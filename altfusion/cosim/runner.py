@@ -19,6 +19,10 @@ that instant, and the loop through the plant is broken where the physics breaks 
 component's step, as the fixed-step masters of libcosim and ECOS do (all components step in
 parallel, outputs are exchanged when a step ends). It is the reference those engines are
 checked against (``altfusion.interop``): a feedthrough signal then arrives one base step late.
+
+Recording: outputs as the components computed them, and inputs as the runner gave them to the
+step that ended at the recorded time (a sample count an estimator saw, for ``altfusion
+timing``).
 """
 
 import graphlib
@@ -127,6 +131,17 @@ class _Stepped:
         """The (buffer, slot) holding the output a link reads."""
         return self.outputs[link.kind], link.slot
 
+    def input_source(self, path: str) -> tuple[Any, int] | None:
+        """The (buffer, slot) holding the value input ``path`` was given in the last step:
+        its latch, or its feedthrough source's output; None if no connection drives it."""
+        for position, (_, _, link) in enumerate(self.delayed):
+            if link.end == path:
+                return self._latched, position
+        for _, _, link in self.feedthrough:
+            if link.end == path:
+                return link.source.source(link)
+        return None
+
     def refresh_outputs(self) -> None:
         """Read the outputs other components use (every step of this component)."""
         for read in self._linked_reads:
@@ -199,8 +214,8 @@ class Simulation:
                 component.prepare_outputs()
             for component in self._components:
                 component.prepare_inputs()
-            self._record_sources = [(stepped.outputs[kind], slot) for _, stepped, kind, slot, _
-                                    in self._recorded]
+            self._record_sources = [self._record_source(path, stepped, kind, slot)
+                                    for path, stepped, kind, slot, _ in self._recorded]
         except Exception:
             self.close()
             raise
@@ -239,6 +254,8 @@ class Simulation:
         return stepped, var.type, names.index(var.name)
 
     def _resolve_recording(self) -> list[tuple[str, _Stepped, str, int, str]]:
+        """(path, component, type, output slot, unit) of every recorded signal; an input's
+        slot is -1 (its source is resolved with the connections: :meth:`_record_source`)."""
         paths = list(self.system.record)
         if not paths:
             paths = [f"{c.name}.{v.name}" for c in self._components
@@ -246,10 +263,25 @@ class Simulation:
                      if v.causality == "output" and v.type in FMI_TYPES]
         recorded = []
         for path in paths:
+            stepped, var = self._variable(path)
+            if var.causality == "input":
+                recorded.append((path, stepped, var.type, -1, var.unit or ""))
+                continue
             stepped, kind, slot = self._output_slot(path)
-            unit = self._variable(path)[1].unit or ""
-            recorded.append((path, stepped, kind, slot, unit))
+            recorded.append((path, stepped, kind, slot, var.unit or ""))
         return recorded
+
+    def _record_source(self, path: str, stepped: _Stepped, kind: str,
+                       slot: int) -> tuple[Any, int]:
+        """The (buffer, slot) a recorded signal is read from: an output's cache, or for an
+        input the value the runner gives it (latched, or its feedthrough source's)."""
+        if slot >= 0:
+            return stepped.outputs[kind], slot
+        source = stepped.input_source(path)
+        if source is None:
+            raise CosimError(f"'{path}': no connection drives this input; only connected "
+                             f"inputs can be recorded")
+        return source
 
     def _resolve_connections(self) -> None:
         driven: set[str] = set()
