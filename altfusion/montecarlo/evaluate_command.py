@@ -4,6 +4,7 @@ HTML page and markdown (``docs/evaluation.md`` with ``--docs``)."""
 import argparse
 from pathlib import Path
 
+from altfusion.errors import UsageError
 from altfusion.montecarlo.commands import guarded
 
 DEFAULT_RUNS = 20
@@ -60,6 +61,8 @@ def command_evaluate(args: argparse.Namespace) -> int:
     )
     from altfusion.montecarlo.execution import Execution
 
+    if args.runs is not None and args.runs < 1:
+        raise UsageError(f"--runs {args.runs}: expected at least 1 run per scenario")
     out = Path(args.out)
     scenarios, estimators, fmu_paths = plan_evaluation(
         args.models, _names(args.estimators), _names(args.scenarios))
