@@ -39,6 +39,7 @@ def output_folder(out: str | Path) -> Path:
 
 
 def command_run(args: argparse.Namespace) -> int:
+    from altfusion.health_events import format_events, health_events, write_events
     from altfusion.plotting import plot_results
     from altfusion.summary import format_summary
 
@@ -66,12 +67,17 @@ def command_run(args: argparse.Namespace) -> int:
     if len(results.time) > 1:
         files.append(str(plot_results(results, out / f"{stem}.png", spec.name,
                                       spec.description)))
+    events = health_events(results)
+    if events:
+        files.append(str(write_events(events, out / f"{stem}.events.csv")))
     print(f"{spec.name}: {spec.description}")
     print(f"simulated {results.time[0]:g} s to {results.time[-1]:g} s "
           f"({len(spec.components)} components, base step {spec.base_step:g} s)\n")
     if len(results.time) > 1:
         print(format_summary(results, spec.metrics))
-    print(f"\nwrote {' and '.join(files)}")
+    if events:
+        print(f"\n{format_events(events, files[-1])}")
+    print(f"\nwrote {', '.join(files)}")
     if isinstance(failure, RunInterruptedError):
         print(f"error: {failure}, results so far written (marked {INCOMPLETE})",
               file=sys.stderr)
@@ -126,6 +132,7 @@ def apply_fault(ssp: Path, loaded: LoadedSystem, fault: str) -> LoadedSystem:
 
 
 def command_replay(args: argparse.Namespace) -> int:
+    from altfusion.health_events import format_events, health_events, write_events
     from altfusion.replay.compare import format_table, sample_counts
     from altfusion.replay.run import plan_replay, run_replay
     from altfusion.replay.ulog import LogReadError
@@ -160,7 +167,11 @@ def command_replay(args: argparse.Namespace) -> int:
           f"a common datum (mean removed); GPS innov = gps_h - prior h; NIS over h_std² + "
           f"epv²; h-range = implied ground height, flat ground.\n")
     print(format_table(replay.reports))
-    print(f"\nwrote {' and '.join(str(f) for f in replay.files)}")
+    events = health_events(replay.results)
+    files = [*replay.files, write_events(events, Path(args.out) / f"{replay.spec.name}"
+                                                                   f".events.csv")]
+    print(f"\n{format_events(events, str(files[-1]))}")
+    print(f"\nwrote {', '.join(str(f) for f in files)}")
     return 0
 
 

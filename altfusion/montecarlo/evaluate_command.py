@@ -45,6 +45,7 @@ def _names(text: str | None) -> list[str] | None:
 
 def command_evaluate(args: argparse.Namespace) -> int:
     from altfusion.atomic import write_text
+    from altfusion.montecarlo.campaign_events import report_campaign_events
     from altfusion.montecarlo.commands import INTERRUPTED, _report_outcome
     from altfusion.montecarlo.evaluate_report import (
         format_markdown,
@@ -89,8 +90,10 @@ def command_evaluate(args: argparse.Namespace) -> int:
                               "no workers")}
     print()
     print(format_text(cells))
+    events = [report_campaign_events(out / s.name, s.name) for s, o in outcomes if o]
+    print("\n" + "\n".join(text for text, _path in events))
     markdown = format_markdown(cells, names, scenarios, record)
-    files = [write_text(out / "evaluation.md", markdown),
+    files = [*(path for _text, path in events), write_text(out / "evaluation.md", markdown),
              write_html(out / "evaluation.html", cells, names, scenarios, record),
              write_text(out / "evaluation_summary.json", summary_json(cells))]
     if args.docs:
