@@ -7,9 +7,11 @@ recorded rows, so they come out the same from any host's results (our runner, li
 ECOS, a CSV written elsewhere) and need nothing from inside the FMU:
 
 * ``initialized``: the ``INITIALIZED`` bit is first set;
-* ``rejected``: a sample of the source rejected by its gate or plausibility bound (from the
-  increments of ``<source>_rejected`` where recorded; else each row where the source's
-  ``REJECTED`` bit is set and its test ratio changed, i.e. a new rejected sample);
+* ``rejected``: samples of the source rejected by its gate or plausibility bound, counted
+  exactly by the increments of ``<source>_rejected`` where it is recorded; else one event per
+  row where the source's ``REJECTED`` bit is set and its test ratio changed (a new rejected
+  sample; a source sampled faster than the rows are recorded may have had more, so these
+  events are not ``exact`` and are said as "in N recorded rows");
 * ``isolated``: the source's ``ISOLATED`` bit is set (declared faulty), and ``re-admitted``
   when it is cleared again (its samples pass, or its offset state was re-referenced);
 * ``fallback``: at an isolation, the height sources fused and not isolated that carry the
@@ -57,6 +59,8 @@ class HealthEvent:
     what: str
     test_ratio: float = math.nan
     count: int = 1
+    exact: bool = True
+    """False: at least ``count`` samples (rejections seen in the recorded rows only)."""
 
 
 def status_names(value: int) -> list[str]:
@@ -98,9 +102,10 @@ class _EstimatorHistory:
         ratios = self.columns.get(f"{source}_test_ratio")
         return math.nan if ratios is None else float(ratios[row])
 
-    def event(self, row: int, source: str, what: str, count: int = 1) -> HealthEvent:
+    def event(self, row: int, source: str, what: str, count: int = 1,
+              exact: bool = True) -> HealthEvent:
         ratio = self.ratio(source, row) if source in SOURCES and what != FALLBACK else math.nan
-        return HealthEvent(float(self.time[row]), self.name, source, what, ratio, count)
+        return HealthEvent(float(self.time[row]), self.name, source, what, ratio, count, exact)
 
     def events(self) -> list[HealthEvent]:
         found = []
@@ -127,7 +132,8 @@ class _EstimatorHistory:
         new = rejected & ~np.concatenate(([False], rejected[:-1]))
         if ratios is not None:
             new |= rejected & (np.diff(ratios, prepend=np.nan) != 0)
-        return [self.event(int(row), source, REJECTED) for row in np.flatnonzero(new)]
+        return [self.event(int(row), source, REJECTED, exact=False)
+                for row in np.flatnonzero(new)]
 
     def isolations(self, source: str) -> list[HealthEvent]:
         isolated = self.source_bit(source, SourceBit.ISOLATED).astype(np.int8)
@@ -189,6 +195,8 @@ def _line(group: list[HealthEvent]) -> str:
     ratio = f" (test ratio up to {max(ratios):.3g})" if ratios else ""
     span = (f"between {first.time:.1f} and {last.time:.1f} s" if last.time > first.time
             else f"at {first.time:.1f} s")
+    if not all(e.exact for e in group):
+        return f"    {first.time:7.2f} s  {subject} in {count} recorded rows {span}{ratio}"
     return f"    {first.time:7.2f} s  {count} x {subject} {span}{ratio}"
 
 
@@ -224,15 +232,16 @@ COLUMNS = tuple(f.name for f in fields(HealthEvent))
 
 
 def events_csv(events: list[HealthEvent], extra: dict[str, list] | None = None) -> str:
-    """The events as CSV text (``time,estimator,source,what,test_ratio,count``, with the
-    ``extra`` columns first, one value per event)."""
+    """The events as CSV text (``time,estimator,source,what,test_ratio,count,exact``, with
+    the ``extra`` columns first, one value per event)."""
     extra = extra or {}
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")
     writer.writerow([*extra, *COLUMNS])
     for index, event in enumerate(events):
         writer.writerow([*(values[index] for values in extra.values()),
-                         *(f"{v:.10g}" if isinstance(v, float) else v for v in astuple(event))])
+                         *(f"{v:.10g}" if isinstance(v, float) else int(v) if isinstance(v, bool)
+                           else v for v in astuple(event))])
     return buffer.getvalue()
 
 

@@ -151,6 +151,6 @@ def test_each_scenario_writes_and_summarizes_its_runs_health_events(evaluated):
             events = health_events(load_run(folder, index).results)
             expected += events_csv(events, {"run": [index] * len(events)}).splitlines()[1:]
         lines = (folder / f"{scenario}.events.csv").read_text().splitlines()
-        assert lines[0] == "run,time,estimator,source,what,test_ratio,count"
+        assert lines[0] == "run,time,estimator,source,what,test_ratio,count,exact"
         assert lines[1:] == expected and any(",initialized," in line for line in expected)
         assert f"{scenario}: health events of 2 runs" in stdout

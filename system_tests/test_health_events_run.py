@@ -41,7 +41,8 @@ def test_the_baro_step_is_said_in_words(baro_step_run):
     assert f"health events (all in {events}):" in stdout
     said = block(stdout, "AltitudeEKF")
     assert said[0] == "       0.10 s  initialized"
-    assert said[1].startswith("     130.00 s  26 x rejected baro between 130.0 and 132.5 s")
+    assert said[1].startswith("     130.00 s  rejected baro in 26 recorded rows between 130.0 "
+                              "and 132.5 s")
     assert said[2].startswith("     132.50 s  isolated baro (test ratio ")
     assert said[3] == "     132.50 s  height carried by gps, radar, laser"
     for estimator in ("BaselineKF", "YangFusionKF", "XuSHAEKF"):

@@ -76,7 +76,8 @@ def test_repeated_events_are_grouped_into_one_line():
         "health events (all in x.events.csv):",
         "  est",
         "       0.10 s  initialized",
-        "       0.40 s  13 x rejected baro between 0.4 and 1.6 s (test ratio up to 15)",
+        "       0.40 s  rejected baro in 13 recorded rows between 0.4 and 1.6 s (test ratio "
+        "up to 15)",
         "       1.60 s  isolated baro (test ratio 9)",
         "       1.60 s  height carried by gps",
         "       1.70 s  rejected baro (test ratio 9.5)",
@@ -96,9 +97,11 @@ def test_a_rejection_count_output_counts_every_rejected_sample():
     counts[5:] = 10
     counts[9:] = 37
     results.columns["est.baro_rejected"] = counts
-    rejected = [(round(e.time, 1), e.count) for e in health_events(results)
+    rejected = [(round(e.time, 1), e.count, e.exact) for e in health_events(results)
                 if e.what == REJECTED and e.source == "baro"]
-    assert rejected == [(0.5, 10), (0.9, 27)]
+    assert rejected == [(0.5, 10, True), (0.9, 27, True)]
+    assert "0.50 s  37 x rejected baro between 0.5 and 0.9 s" in format_events(
+        health_events(results))
 
 
 def test_the_events_of_a_csv_written_elsewhere_are_the_same(tmp_path):
@@ -112,5 +115,5 @@ def test_status_bits_are_named_and_the_csv_lists_every_event():
                                                             "GPS_FUSED"]
     events = [HealthEvent(1.5, "est", "baro", ISOLATED, 9.0), HealthEvent(2.0, "est", "", VALID)]
     assert events_csv(events, {"run": [3, 3]}).splitlines() == [
-        "run,time,estimator,source,what,test_ratio,count",
-        "3,1.5,est,baro,isolated,9,1", "3,2,est,,validity regained,nan,1"]
+        "run,time,estimator,source,what,test_ratio,count,exact",
+        "3,1.5,est,baro,isolated,9,1,1", "3,2,est,,validity regained,nan,1,1"]
