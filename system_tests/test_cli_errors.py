@@ -88,6 +88,10 @@ def cases(plant: Path, tmp: Path) -> dict[str, tuple[list[str], str]]:
                                    str(tmp / "mc")], "--stop 1e+308: recording 1.00e309 rows"),
         "mc stop NaN": (["mc", str(plant), "-n", "1", "--stop", "nan", "--out",
                          str(tmp / "mc")], "--stop nan: must be finite"),
+        "mc no runs": (["mc", str(plant), "-n", "0", "--out", str(tmp / "mc")],
+                       "-n 0: the number of runs must be >= 1"),
+        "mc negative seed": (["mc", str(plant), "-n", "1", "--seed", "-1", "--out",
+                              str(tmp / "mc")], "--seed -1: the master seed must be >= 0"),
         "a folder": (["run", str(plant.parent)], "a folder; expected an SSP archive (a .ssp "
                                                  "file), such as"),
         "evaluate no runs": (["evaluate", "--runs", "0", "--models", str(plant.parent), "--out",
@@ -144,6 +148,7 @@ CASE_NAMES = [
     "missing log", "log not a ULog", "offset NaN", "offset beyond the log", "no campaign",
     "no SSP for mc", "unknown fault", "fault without its sensor", "unknown fault for mc",
     "stop beyond memory", "stop beyond any array", "mc stop beyond memory", "mc stop NaN",
+    "mc no runs", "mc negative seed",
     "a folder", "evaluate no runs", "plant mass", "no sensor data", "damaged sensor data",
 ]
 

@@ -43,7 +43,7 @@ def plan(source: SystemSource, master_seed: int = 0, stop_time: float | None = N
          parameters: dict[str, Any] | None = None) -> tuple[CampaignTask, PreparedSystem]:
     """Load the system once in this process (no FMU is instantiated) and describe the task."""
     if master_seed < 0:
-        raise CampaignError(f"the master seed must be >= 0, got {master_seed}")
+        raise CampaignError(f"--seed {master_seed}: the master seed must be >= 0")
     prepared = load_system(source)
     for path in prepared.fmu_paths.values():
         check_core_version(fmu_info(path))

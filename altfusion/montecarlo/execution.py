@@ -45,7 +45,7 @@ class CampaignSettings:
         if runs is None:
             raise CampaignError("a new campaign needs its number of runs (-n N)")
         if runs < 1:
-            raise CampaignError(f"the number of runs must be >= 1, got {runs}")
+            raise CampaignError(f"-n {runs}: the number of runs must be >= 1")
         return CampaignSettings(
             runs,
             self.master_seed if self.master_seed is not None else stored.get("master_seed", 0),
