@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from altfusion.estimators.base import SourceBit, source_bit
+from altfusion.estimators.health import SourceBit, source_bit
 
 COVERAGE_SIGMAS = 2.0
 """|e| <= 2 h_std: 95.4 % of the time for a Gaussian error with an honest h_std."""

@@ -10,9 +10,9 @@ from state_restore import assert_restores_identically
 from altfusion.cosim.instances import CosimError, FmuInstance, fmu_info
 from altfusion.estimators.altitude_ekf import AltitudeEKF
 from altfusion.estimators.bao import BaoDriftEstimator
-from altfusion.estimators.base import SourceBit, Status, source_bit
 from altfusion.estimators.baseline import BaselineKF
 from altfusion.estimators.hajiyev import HajiyevAdaptiveEstimator
+from altfusion.estimators.health import SourceBit, Status, source_bit
 from altfusion.estimators.whang import WhangGAEstimator
 from altfusion.estimators.xu import XuSHAEKF
 from altfusion.estimators.yang import YangFusionKF

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from altfusion.cosim.ssp import read_ssp
+from altfusion.health_events import events_csv, health_events
 from altfusion.montecarlo.storage import finished_runs, load_run
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -136,3 +137,20 @@ def test_fault_scenarios_put_the_fault_between_sensors_and_every_estimator(fmus)
     assert "laser" in by_name["range_terrain"].not_applicable["BaselineKF"]
     assert by_name["nominal_flight"].fault is None
     assert "fault" not in {c.name for c in by_name["nominal_flight"].spec.components}
+
+
+def test_each_scenario_writes_and_summarizes_its_runs_health_events(evaluated):
+    """``<scenario>/<scenario>.events.csv`` holds every event of every stored run (what
+    :func:`health_events` reads off the run's recorded outputs), and the command says for
+    each scenario how many runs' events it summarized."""
+    out, stdout = evaluated
+    for scenario in SCENARIOS.split(","):
+        folder = out / scenario
+        expected = []
+        for index in finished_runs(folder):
+            events = health_events(load_run(folder, index).results)
+            expected += events_csv(events, {"run": [index] * len(events)}).splitlines()[1:]
+        lines = (folder / f"{scenario}.events.csv").read_text().splitlines()
+        assert lines[0] == "run,time,estimator,source,what,test_ratio,count,exact"
+        assert lines[1:] == expected and any(",initialized," in line for line in expected)
+        assert f"{scenario}: health events of 2 runs" in stdout

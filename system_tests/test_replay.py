@@ -14,6 +14,7 @@ from altfusion.cosim import CosimError, read_ssp
 from altfusion.cosim.results import Results
 from altfusion.cosim.runner import Simulation
 from altfusion.estimators.registry import ESTIMATOR_CLASSES
+from altfusion.health_events import events_csv, health_events
 from altfusion.replay.compare import (
     compare_all,
     format_table,
@@ -258,3 +259,19 @@ def test_the_table_flags_a_divergent_estimate_and_gives_the_valid_fraction():
     # samples arrive at rows 1..9 (t = 1..9 s): valid from row 1 while t - 9 s <= 5 s, 14 of 20
     assert good.valid_fraction == pytest.approx(14 / 20)
     assert "70%" in format_table(reports)
+
+
+def test_altfusion_replay_says_the_health_events_and_writes_them(fmus, tmp_path, capsys):
+    """The replay prints each estimator's health events in words and writes them all to
+    ``<system>.events.csv``, derived from the recorded outputs as for any host's results."""
+    log = LOG_DIR / LOGS["replay_px4_sitl"].file
+    assert main(["replay", str(log), "--models", str(MODELS), "--out", str(tmp_path),
+                 "--estimators", "BaselineKF,AltitudeEKF"]) == 0
+    out = capsys.readouterr().out
+    stem = "replay_pyulog_sample_px4_events"
+    events = tmp_path / f"{stem}.events.csv"
+    assert f"health events (all in {events}):" in out
+    results = Results.from_csv(tmp_path / f"{stem}.csv")
+    assert events.read_text() == events_csv(health_events(results))
+    said = out.split("health events")[1]
+    assert "  BaselineKF\n" in said and "  AltitudeEKF\n" in said and " initialized" in said

@@ -17,8 +17,7 @@ import pytest
 
 from altfusion.errors import ParameterError
 from altfusion.estimators.altitude_ekf import AltitudeEKF
-from altfusion.estimators.base import SourceBit, source_bit
-from altfusion.estimators.health import UNKNOWN_STD
+from altfusion.estimators.health import UNKNOWN_STD, SourceBit, source_bit
 
 sys.path.insert(0, str(Path(__file__).parent))
 from stream_feeder import StreamFeeder  # noqa: E402

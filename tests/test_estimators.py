@@ -7,9 +7,9 @@ import pytest
 from stream_feeder import StreamFeeder
 
 from altfusion.errors import ParameterError
-from altfusion.estimators.base import SourceBit, Status, source_bit
 from altfusion.estimators.baseline import BaselineKF, BaselineKFParams
 from altfusion.estimators.hajiyev import HajiyevAdaptiveEstimator, HajiyevParams
+from altfusion.estimators.health import SourceBit, Status, source_bit
 from altfusion.estimators.whang import WhangGAEstimator, WhangParams
 from altfusion.physics.atmosphere import Atmosphere, AtmosphereParams
 from altfusion.physics.barometric import height_from_pressure, pressure_at

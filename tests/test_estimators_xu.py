@@ -8,7 +8,7 @@ import pytest
 from stream_feeder import StreamFeeder
 
 from altfusion.errors import ParameterError
-from altfusion.estimators.base import SourceBit, source_bit
+from altfusion.estimators.health import SourceBit, source_bit
 from altfusion.estimators.xu import BARO_SOURCE, LASER_SOURCE, XuParams, XuSHAEKF
 from altfusion.physics.profiles import make_profile, trapezoid_moves
 

@@ -8,9 +8,9 @@ import pytest
 
 from altfusion.estimators.altitude_ekf import AltitudeEKF
 from altfusion.estimators.bao import BaoDriftEstimator
-from altfusion.estimators.base import SourceBit, Status, source_bit
 from altfusion.estimators.baseline import BaselineKF
 from altfusion.estimators.hajiyev import HajiyevAdaptiveEstimator
+from altfusion.estimators.health import SourceBit, Status, source_bit
 from altfusion.estimators.whang import WhangGAEstimator
 from altfusion.estimators.xu import XuSHAEKF
 from altfusion.estimators.yang import YangFusionKF

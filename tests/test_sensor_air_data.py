@@ -9,6 +9,7 @@ import pytest
 from sensor_runs import Z999, mean_tolerance, run, std_tolerance
 
 from altfusion.constants import G0, ISA_LAPSE_RATE, ISA_P0, ISA_T0, R_AIR
+from altfusion.errors import ParameterError
 from altfusion.physics.atmosphere import Atmosphere, AtmosphereParams
 from altfusion.physics.barometric import height_from_pressure, pressure_at, temperature_at
 from altfusion.sensors import AirDataModule, AirDataParams
@@ -259,3 +260,20 @@ def test_the_principle_error_grows_with_the_weather_drift():
         assert b == pytest.approx(-R_AIR * ISA_T0 / G0 * r, abs=R_AIR * ISA_T0 / G0 * r * r)
         biases.append(b)
     assert 0 < biases[0] < biases[1] < biases[2] < biases[3]
+
+
+def test_noise_beyond_the_calibration_atmosphere_is_refused_by_name():
+    """The calibration's formula has no pressure where its temperature T0 + lapse·(h - H0)
+    reaches 0 K: 29 m above H0 with T0 = 1 K and the steepest lapse rate, -0.0342 K/m, which
+    a noise of 1000 m leaves within a few samples. The sample fails with a
+    ValueError naming the cause instead of a complex pressure (TypeError at t = 0)."""
+    sensor = air_data(**{**QUIET, "height_noise_std": 1000.0, "T0": 1.0,
+                         "lapse_rate": -0.0342}, seed=1)
+    with pytest.raises(ValueError, match=r"beyond the calibration's atmosphere, whose "
+                                         r"temperature reaches 0 K: lower height_noise_std"):
+        run(sensor, 10, OUTPUTS, lambda t: {"p_static": 1.0e5, "T_air": 288.0})
+
+
+def test_noise_std_beyond_its_bound_is_refused_at_initialization():
+    with pytest.raises(ParameterError, match=r"'height_noise_std' = 1000000.0: must be <= 1000"):
+        air_data(height_noise_std=1e6)

@@ -27,6 +27,7 @@ timing``).
 
 import graphlib
 import math
+import os
 from dataclasses import dataclass, field
 from operator import getitem
 from pathlib import Path
@@ -46,7 +47,8 @@ from altfusion.errors import ParameterError
 from altfusion.systems.spec import SystemSpec
 from altfusion.timegrid import TickClock
 
-__all__ = ["MASTERS", "CosimError", "Simulation", "simulate"]
+__all__ = ["MASTERS", "CosimError", "RunInterruptedError", "Simulation", "recorded_columns",
+           "recording_size", "simulate"]
 
 MASTERS = ("ordered", "jacobi")
 """Master algorithms: ordered stepping (the default) and Jacobi (every input latched)."""
@@ -180,6 +182,15 @@ class RunFailedError(CosimError):
         self.results = results
 
 
+class RunInterruptedError(RunFailedError):
+    """The run was stopped by :meth:`Simulation.interrupt` (Ctrl-C); ``results`` holds the
+    rows recorded before."""
+
+
+class _InterruptRequestError(Exception):
+    """Raised inside the stepping loop when an interruption was requested."""
+
+
 class Simulation:
     """A system ready to run, repeatedly: instances are created once and reset between runs."""
 
@@ -196,6 +207,7 @@ class Simulation:
         self._components: list[_Stepped] = []
         self._by_name: dict[str, _Stepped] = {}
         self._runs = 0
+        self._interrupted = False
         instance_class = FmuInstance if backend == "fmu" else CoreInstance
         try:
             for index, spec in enumerate(system.components):
@@ -340,9 +352,7 @@ class Simulation:
         """Simulate from the start time to ``stop_time`` (default: the system's)."""
         system = self.system
         stop = system.stop_time if stop_time is None else stop_time
-        steps = self.base.ticks_in(stop - system.start_time, "stop_time")
-        interval = system.output_interval or system.base_step
-        every = self.base.ticks_in(interval, "output_interval", allow_zero=False)
+        steps, every, rows = recording_size(system, stop, len(self._recorded))
         overrides = self._split_parameters(parameters or {})
         if self._runs:
             for component in self._components:
@@ -351,7 +361,6 @@ class Simulation:
             component.instance.warnings.clear()
         self._runs += 1
         self._initialize(stop, overrides)
-        rows = steps // every + 1
         data = np.empty((rows, len(self._recorded)))
         times = np.full(rows, np.nan)
         self._record(data, times, 0, 0)
@@ -360,10 +369,20 @@ class Simulation:
         except Exception as error:
             recorded = int(np.isfinite(times).sum())    # rows are recorded in order
             partial = self._results(times[:recorded], data[:recorded])
+            if isinstance(error, _InterruptRequestError):
+                self._interrupted = False
+                raise RunInterruptedError(f"interrupted after t = {times[recorded - 1]:g} s",
+                                          partial) from None
             raise RunFailedError(f"{error}", partial) from error
         for component in self._components:
             component.instance.terminate()
         return self._results(times, data)
+
+    def interrupt(self) -> None:
+        """Stop the run in progress (or the next one) after its current base step, as
+        :class:`RunInterruptedError`: safe to call from a signal handler, unlike raising
+        KeyboardInterrupt, which inside an FMU's Python code becomes its fmi2Fatal."""
+        self._interrupted = True
 
     def _loop(self, steps: int, every: int, data: np.ndarray, times: np.ndarray) -> None:
         """The stepping loop of :meth:`run`, recording every ``every`` base steps.
@@ -379,6 +398,8 @@ class Simulation:
                      c.step, c._linked_reads) for c in self._order]
         recorded_only = [c.refresh_recorded for c in self._components if c._recorded_reads]
         for n in range(steps):
+            if self._interrupted:
+                raise _InterruptRequestError
             for ratio, latch in latching:
                 if n % ratio == 0:
                     latch()
@@ -454,6 +475,47 @@ class Simulation:
 
     def __exit__(self, *_exc) -> None:
         self.close()
+
+
+def physical_memory() -> int:
+    """This machine's memory in bytes (1 TiB where the system does not say)."""
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (AttributeError, ValueError, OSError):
+        return 1 << 40
+
+
+def _magnitude(count: int) -> str:
+    """``count`` in three significant digits, however large (no float overflow)."""
+    digits = str(count)
+    return digits if len(digits) <= 4 else f"{digits[0]}.{digits[1:3]}e{len(digits) - 1}"
+
+
+def recorded_columns(system: SystemSpec, fmu_paths: dict[str, Path]) -> int:
+    """How many signals a run of ``system`` records: its ``record`` list, else every output
+    (read from the modelDescriptions, no FMU instantiated)."""
+    if system.record:
+        return len(system.record)
+    return sum(1 for c in system.components for v in fmu_info(fmu_paths[c.fmu]).variables.values()
+               if v.causality == "output" and v.type in FMI_TYPES)
+
+
+def recording_size(system: SystemSpec, stop: float, columns: int) -> tuple[int, int, int]:
+    """``(base steps, base steps per recorded row, rows)`` of a run of ``system`` to ``stop``
+    recording ``columns`` signals; a ParameterError naming ``stop_time`` when the table (the
+    signals and the time, 8 bytes each) would exceed this machine's memory, before anything is
+    allocated."""
+    base = TickClock(system.base_step, system.start_time, name="base_step")
+    steps = base.ticks_in(stop - system.start_time, "stop_time")
+    every = base.ticks_in(system.output_interval or system.base_step, "output_interval",
+                          allow_zero=False)
+    rows = steps // every + 1
+    size, memory = rows * (columns + 1) * 8, physical_memory()
+    if size > memory:
+        raise ParameterError("stop_time", stop, f"recording {_magnitude(rows)} rows of "
+                             f"{columns} signals needs {_magnitude(size >> 30)} GiB, more "
+                             f"than this machine's {memory >> 30} GiB of memory")
+    return steps, every, rows
 
 
 def simulate(system: SystemSpec, fmu_paths: dict[str, Path], backend: str = "fmu",

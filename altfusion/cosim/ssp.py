@@ -199,6 +199,10 @@ class LoadedSystem:
 def read_ssp(path: Path) -> LoadedSystem:
     """Read and schema-validate an SSP archive written by :func:`write_ssp`."""
     path = Path(path)
+    if path.is_dir():
+        found = sorted(path.glob("*.ssp"))
+        hint = f", such as {found[0]}" if found else ""
+        raise UsageError(f"{path}: a folder; expected an SSP archive (a .ssp file){hint}")
     if not path.is_file():
         raise UsageError(f"{path}: no such file")
     try:

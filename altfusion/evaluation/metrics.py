@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from altfusion import scores
-from altfusion.estimators.base import SourceBit, Status, source_bit
+from altfusion.estimators.health import SourceBit, Status, source_bit
 from altfusion.scores import RECOVERY_FACTOR
 
 RECOVERY_WINDOW = 2.0

@@ -407,12 +407,14 @@ class CoreSlave(Fmi2Slave, metaclass=ReusedSlaveClass):
         self._set("setString", String, vrs, values)
 
     # ----------------------------------------------------------------- FMU state
+    def _current_state(self) -> dict[str, Any]:
+        """The instance's state (not copied): what getFMUstate copies, setFMUstate replaces."""
+        return {"core": self.core, "params": self._params, "step_size": self._step_size,
+                "start_time": self._start_time, "failure": self._failure}
+
     def _get_fmu_state(self) -> dict[str, Any]:
         try:
-            return copy.deepcopy({
-                "core": self.core, "params": self._params, "step_size": self._step_size,
-                "start_time": self._start_time, "failure": self._failure,
-            })
+            return copy.deepcopy(self._current_state())
         except Exception:
             self._log_exception("getFMUstate")
             return {}
@@ -420,6 +422,12 @@ class CoreSlave(Fmi2Slave, metaclass=ReusedSlaveClass):
     def _set_fmu_state(self, state: dict[str, Any] | fmu_state.RefusedState) -> None:
         if isinstance(state, fmu_state.RefusedState):
             self._log(Fmi2Status.error, f"setFMUstate refused the state: {state.reason}; "
+                                        "the instance keeps its current state")
+            return
+        try:
+            fmu_state.check_like(state, self._current_state())
+        except fmu_state.StateError as error:
+            self._log(Fmi2Status.error, f"setFMUstate refused the state: {error}; "
                                         "the instance keeps its current state")
             return
         try:

@@ -17,11 +17,14 @@ from altfusion.cosim.runner import Simulation
 from altfusion.errors import UsageError
 from altfusion.replay.calibration import launch_calibration
 from altfusion.replay.compare import EstimatorReport, compare_all, settle_time
-from altfusion.replay.extract import FlightLog
+from altfusion.replay.extract import ATTITUDE, EKF_PREFIX, LOCAL_POSITION, FlightLog
 from altfusion.replay.plot import plot_replay
-from altfusion.replay.ulog import read_ulog
+from altfusion.replay.ulog import LogReadError, read_ulog
 from altfusion.systems.replay import BASE_STEP, EstimatorEntry, replay_system, replay_tuning
 from altfusion.systems.spec import SystemSpec
+
+DAMAGE = ("missing topic", "non-finite", "bad time stamp", "non-monotonic", "duplicate")
+"""Findings about a sensor topic that say its data are damaged (named when none is left)."""
 
 
 @dataclass
@@ -76,6 +79,16 @@ def plan_replay(log_file: Path, estimators: list[str], fmu_paths: dict[str, Path
     """Read ``log_file`` and build its system with ``estimators`` (FMU model names)."""
     log_file = Path(log_file).resolve()
     log = read_ulog(log_file)
+    if log.duration < BASE_STEP:
+        sensors = [p for s in log.streams.values() if s.prefix != EKF_PREFIX for p in s.problems]
+        found = "; ".join(list(dict.fromkeys(
+            f"{p.topic}: {p.kind}" for p in [*log.problems, *sensors]
+            if p.topic not in (LOCAL_POSITION, ATTITUDE) and p.kind in DAMAGE))[:4])
+        counts = ", ".join(f"{s.topic} {len(s)}" for s in log.streams.values()
+                           if s.prefix != EKF_PREFIX) or "none"
+        raise LogReadError(f"{log_file}: the sensor data span {log.duration:g} s, less than "
+                           f"one replay step ({BASE_STEP:g} s): the sensor section is missing or "
+                           f"damaged (samples: {counts}{'; ' + found if found else ''})")
     if time_offset >= log.duration:
         raise UsageError(f"time offset {time_offset:g} s: at or beyond the end of the log's "
                          f"sensor data ({log.duration:g} s)")

@@ -24,7 +24,8 @@ from altfusion.sensors.sampling import Sample, SampledSensor, SamplingParams, re
 class AccelerometerParams(SamplingParams):
     sample_period: float = param(0.01, "s", "Time between samples (100 Hz)", positive=True)
     noise_std: float = param(
-        0.01, "m/s2", "White noise, 1 sigma (yang2020 Section 4.2: 0.01 m/s2)", min=0.0
+        0.01, "m/s2", "White noise, 1 sigma (yang2020 Section 4.2: 0.01 m/s2). At most 150 m/s2: "
+        "beyond 16 g a MEMS accelerometer's every sample is clipped", min=0.0, max=150.0,
     )
     bias: float = param(0.0, "m/s2", "Constant bias of the specific-force measurement")
     bias_std: float = param(

@@ -57,7 +57,10 @@ class AirDataParams(SamplingParams):
     )
     height_noise_std: float = param(
         0.5, "m", "White noise of the baro-height, 1 sigma (MEMS barometer, xu2016 reading "
-        "in docs/papers.md: 0.5-1 m; whang2008 simulates 5 m, yang2020 20 m)", min=0.0,
+        "in docs/papers.md: 0.5-1 m; whang2008 simulates 5 m, yang2020 20 m). At most 1000 m: the "
+        "calibration's formula has no pressure above H0 + T0/|lapse_rate| (44 km in the ISA, "
+        "8 km at the steepest lapse rate), which noise of more than a few km reaches",
+        min=0.0, max=1000.0,
     )
     pressure_bias: float = param(0.0, "Pa", "Constant offset of the pressure transducer")
     pressure_resolution: float = param(
@@ -66,11 +69,15 @@ class AirDataParams(SamplingParams):
     )
     drift_rate: float = param(
         10.0 / SECONDS_PER_HOUR, "m/s",
-        "Mean rate of the baro-height drift (bao2017 Fig. 1: about +10 m per hour)",
+        "Mean rate of the baro-height drift (bao2017 Fig. 1: about +10 m per hour). At most "
+        "0.1 m/s in size (360 m per hour): faster drifts leave the calibration's atmosphere "
+        "within a day (see height_noise_std)", min=-0.1, max=0.1,
     )
     drift_variance_rate: float = param(
         0.0025, "m2/s", "Spectral density sigma^2 of the drift's white rate noise w (bao2017 "
-        "eq. 6): the random part of the drift has variance sigma^2*t (3 m after 1 h)", min=0.0,
+        "eq. 6): the random part of the drift has variance sigma^2*t (3 m after 1 h). At most "
+        "100 m2/s (600 m after 1 h): a drift of many km leaves the calibration's atmosphere "
+        "(see height_noise_std)", min=0.0, max=100.0,
     )
     wind_coupling: float = param(
         1.0, "1", "Fraction of the dynamic pressure 0.5*rho*v^2 seen as a static-pressure drop "
@@ -81,8 +88,9 @@ class AirDataParams(SamplingParams):
         "p_static/(R*T_air) (bao2017 eq. 7 uses 1.25)", min=0.0,
     )
     temperature_noise_std: float = param(
-        0.1, "K", "White noise of the temperature reading, 1 sigma (whang2008 simulates 1.5 K)",
-        min=0.0,
+        0.1, "K", "White noise of the temperature reading, 1 sigma (whang2008 simulates 1.5 K). "
+        "At most 30 K: a reading of air at 288 K then stays above 0 K within 9 sigma",
+        min=0.0, max=30.0,
     )
     temperature_bias: float = param(0.0, "K", "Constant offset of the temperature reading")
     temperature_resolution: float = param(
@@ -155,6 +163,10 @@ class AirDataModule(SampledSensor):
         self._advance_drift()
         noise = p.height_noise_std * self.rng["height_noise"].standard_normal()
         height = self.calibrated_height(p_sensor) + self.drift + noise
+        if p.T0 + p.lapse_rate * (height - p.H0) <= 0:
+            raise ValueError(f"baro-height {height:.6g} m (drift {self.drift:.6g} m, noise "
+                             f"{noise:.6g} m) is beyond the calibration's atmosphere, whose "
+                             f"temperature reaches 0 K: lower height_noise_std or the drift")
         baro_p = quantize(self.calibrated_pressure(height), p.pressure_resolution)
         temperature_noise = p.temperature_noise_std * (
             self.rng["temperature_noise"].standard_normal())

@@ -25,7 +25,8 @@ class LaserRangefinderParams(SamplingParams):
         0.01, "s", "Time between frames (xu2016 Section 1.2.4: 100 Hz)", positive=True
     )
     noise_std: float = param(
-        0.005, "m", "White noise, 1 sigma (xu2016 Section 1.2.4: +-5 mm)", min=0.0
+        0.005, "m", "White noise, 1 sigma (xu2016 Section 1.2.4: +-5 mm). At most 100 m: a "
+        "rangefinder's noise beyond its range is no measurement", min=0.0, max=100.0,
     )
     min_range: float = param(
         0.1, "m", "Shortest valid range (xu2016 Section 1.2.4)", min=0.0

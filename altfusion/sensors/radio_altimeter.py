@@ -22,7 +22,8 @@ class RadioAltimeterParams(SamplingParams):
         0.2, "s", "Time between samples (yang2020 Section 4.2: 200 ms)", positive=True
     )
     noise_std: float = param(
-        10.0, "m", "White noise, 1 sigma (yang2020 Section 4.2: 10 m)", min=0.0
+        10.0, "m", "White noise, 1 sigma (yang2020 Section 4.2: 10 m). At most 1000 m: a radio "
+        "altimeter's noise beyond its range is no measurement", min=0.0, max=1000.0,
     )
     max_range: float = param(
         1500.0, "m", "Largest measurable height above the terrain (covers yang2020's 1440 m "
