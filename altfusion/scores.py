@@ -61,6 +61,22 @@ def rms(error: np.ndarray, mask: np.ndarray) -> float:
     return float(np.sqrt(np.mean(error[mask] ** 2))) if mask.any() else math.nan
 
 
+RMS_DEFINITION = ("RMS over runs: the square root of the mean, over the runs, of each run's "
+                  "mean squared error (h_est - truth) over the rows where the estimator is "
+                  "initialized (status bit INITIALIZED; every row when no status is "
+                  "recorded); each run weighs the same")
+"""The one RMS of an estimator over several runs, on every page (``altfusion evaluate``'s
+page and table, ``altfusion report``'s table): :func:`pooled_rms` of the runs' mean
+squares."""
+
+
+def pooled_rms(mean_squares: np.ndarray) -> float:
+    """The RMS over runs (:data:`RMS_DEFINITION`) from each run's mean squared error; NaN
+    without a run or with a non-finite run."""
+    mean_squares = np.asarray(mean_squares, dtype=float)
+    return float(np.sqrt(np.mean(mean_squares))) if mean_squares.size else math.nan
+
+
 def window_rms(time: np.ndarray, error: np.ndarray, valid: np.ndarray | None,
                start: float, end: float = math.inf) -> float:
     """RMS of the valid samples of ``error`` in [start, end); NaN if there is none."""
