@@ -37,7 +37,7 @@ def test_an_estimators_reference_plot_shows_its_error_within_its_band():
     assert np.allclose(lines["estimator.h_est - plant.h [m]"].get_ydata(), 0.3)
     assert [c.get_label() for c in error.collections] == ["±2 estimator.h_std [m]"]
     low, high = error.get_ylim()
-    assert -1.0 < low and high < 1.0                 # decimetres, not the 0-1500 m flight
+    assert low > -1.0 and high < 1.0                 # decimetres, not the 0-1500 m flight
 
 
 def test_a_plot_without_an_estimate_gets_no_error_panel():

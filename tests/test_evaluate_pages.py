@@ -84,7 +84,8 @@ def cell(name: str, scenario: str, rms_values: list[float], startup: float = 0.0
 
 
 def scenario(name: str, fault: Fault | None = None) -> Scenario:
-    return Scenario(name, f"{name} flight", SystemSpec(name, "", (), (), 200.0), "plant.h", {}, fault=fault)
+    return Scenario(name, f"{name} flight", SystemSpec(name, "", (), (), 200.0), "plant.h", {},
+                    fault=fault)
 
 
 def test_the_rms_of_a_cell_is_the_rms_over_runs_as_the_campaign_report_computes_it():
@@ -139,21 +140,21 @@ def test_a_cell_plot_is_readable_and_names_every_mark_in_its_legend():
     width, height = (fig.get_size_inches() * PLOT_DPI).round()
     assert width >= 500 and height >= 280
     labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
-    assert labels == ["each run (n=2)", "mean over runs", "±2 h_std (mean over runs)",
+    assert labels == ["each run (n=2)", "RMS over runs", "2 h_std (mean over runs)",
                       "start-up (no max |e|, recover)", "fault transient (no coverage)",
                       "fault start 100 s"]
     fonts = [t.get_fontsize() for t in (fig.axes[0].xaxis.label, fig.axes[0].title)]
     assert min(fonts) * PLOT_DPI / 72 >= 11                     # px
 
 
-def test_every_plot_of_a_scenario_shares_one_y_scale():
+def test_every_plot_of_a_scenario_shares_one_log_y_scale():
+    """Errors of 0.4 m and 500 m (constant: their trailing RMS too) on one axis."""
     cells = [cell("A", "s", [0.4, 0.4]), cell("B", "s", [500.0, 500.0])]
     scale = scenario_scale(cells)
-    limits = {cell_figure(c, scenario("s"), scale).axes[0].get_ylim() for c in cells}
-    assert len(limits) == 1
-    (low, high), = limits
-    assert high == pytest.approx(1.2 * 500.0) and low == -high
-    assert scale[1] == pytest.approx(0.4)                      # the best stays linear
+    axes = [cell_figure(c, scenario("s"), scale).axes[0] for c in cells]
+    assert {ax.get_ylim() for ax in axes} == {scale}
+    assert {ax.get_yscale() for ax in axes} == {"log"}
+    assert scale == pytest.approx((0.2, 1000.0))
 
 
 def test_the_page_images_are_pngs_at_the_plot_size(page):
@@ -163,4 +164,4 @@ def test_the_page_images_are_pngs_at_the_plot_size(page):
     data = re.findall(r'src="data:image/png;base64,([^"]+)"', page)
     assert len(data) == 5                                       # C is n/a in s1
     sizes = {Image.open(io.BytesIO(base64.b64decode(d))).size for d in data}
-    assert sizes == {(530, 300)}
+    assert sizes == {(530, 400)}

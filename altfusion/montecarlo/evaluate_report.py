@@ -17,9 +17,14 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from altfusion.atomic import write_text  # noqa: E402
-from altfusion.montecarlo.evaluate_metrics import STARTUP_TIME, Summary  # noqa: E402
+from altfusion.montecarlo.evaluate_metrics import (  # noqa: E402
+    RECOVERY_WINDOW,
+    STARTUP_TIME,
+    Summary,
+    trailing_rms,
+)
 from altfusion.montecarlo.evaluate_run import METRICS, Cell  # noqa: E402
-from altfusion.montecarlo.evaluate_scenarios import Scenario  # noqa: E402
+from altfusion.montecarlo.evaluate_scenarios import PAPER_SCENARIOS, Scenario  # noqa: E402
 from altfusion.montecarlo.report import STYLE, esc  # noqa: E402
 from altfusion.scores import COVERAGE_SIGMAS, HONEST_COVERAGE, RMS_DEFINITION  # noqa: E402
 
@@ -136,8 +141,8 @@ def format_markdown(cells: dict[str, list[Cell]], estimators: list[str],
 
 PLOT_DPI = 100
 """Per-cell plots are drawn at 100 dpi and shown at their pixel size: 9 pt text is 12.5 px."""
-PLOT_SIZE = (5.3, 3.0)
-"""Inches of a per-cell plot: two side by side fill the page's 1100 px."""
+PLOT_SIZE = (5.3, 4.0)
+"""Inches of a per-cell plot, legend under the axes: two side by side fill the page."""
 RATIO_STEPS = (1.0, 1.5, 3.0, 10.0, 30.0, 100.0)
 """Colour steps of the RMS heat map, as ratios to the column's best (x1 ... x100 and over)."""
 COVERAGE_STEPS = ((0.0, "below 50 %", "#d73027"), (0.5, "50-85 %", "#fc8d59"),
@@ -181,9 +186,9 @@ def best_coverage(cells: list[Cell]) -> float:
 def _heat_cell(cell: Cell, metric: str, best: float) -> str:
     summary = cell.summary(metric) if cell.runs else None
     if cell.not_applicable:
-        return f'<td class="na" title="{esc(cell.not_applicable)}">{NA}</td>'
+        return f'<td class="off" title="{esc(cell.not_applicable)}">{NA}</td>'
     if summary is None or not math.isfinite(summary.mean):
-        return '<td class="na">-</td>'
+        return '<td class="off">-</td>'
     value = summary.mean
     if metric == "rms":
         text, colour = f"{value:.3g}", ratio_colour(value / best if best > 0 else 1.0)
@@ -229,39 +234,45 @@ def coverage_legend() -> str:
             f'Gaussian h_std</p>')
 
 
+def trailing_errors(cell: Cell) -> np.ndarray:
+    """Each run's error as its RMS over the trailing :data:`RECOVERY_WINDOW` s (the quantity
+    the recovery is judged on): positive, so it reads on a log axis, and smooth enough to
+    read where a noisy error would fill the plot."""
+    return np.vstack([trailing_rms(cell.time, error, RECOVERY_WINDOW) for error in cell.errors])
+
+
 def scenario_scale(cells: list[Cell]) -> tuple[float, float]:
-    """One y-scale for every plot of a scenario: (limit, linear threshold) of a symmetric
-    log axis, the limit 1.2x the largest 99.5th percentile of |e| after the start-up, the
-    linear part up to the scenario's smallest RMS (so the best estimator's noise stays
-    linear and a 500 m error fits beside it)."""
-    limits, floors = [1e-3], []
+    """One log y-scale (low, high) for every plot of a scenario: from half the smallest 1st
+    percentile to twice the largest 99.5th percentile of the cells' trailing RMS after the
+    start-up (a 0.4 m error and a 500 m one on the same axis)."""
+    lows, highs = [], []
     for cell in cells:
         if cell.errors is None:
             continue
-        after = cell.errors[:, cell.time >= cell.startup_end]
-        finite = after[np.isfinite(after)]
+        after = trailing_errors(cell)[:, cell.time >= cell.startup_end]
+        finite = after[np.isfinite(after) & (after > 0)]
         if finite.size:
-            limits.append(float(np.percentile(np.abs(finite), 99.5)))
-        if math.isfinite(cell.rms) and cell.rms > 0:
-            floors.append(cell.rms)
-    return 1.2 * max(limits), max(min(floors, default=1.0), 1e-3)
+            lows.append(float(np.percentile(finite, 1.0)))
+            highs.append(float(np.percentile(finite, 99.5)))
+    if not highs:
+        return 1e-3, 1.0
+    return max(0.5 * min(lows), 1e-4), 2.0 * max(highs)
 
 
 def cell_figure(cell: Cell, scenario: Scenario, scale: tuple[float, float]):
-    """Error of every run versus time (thin), the mean over runs (bold) and ± 2 mean h_std
-    (dashed), on the scenario's ``scale``; the start-up, fault start and transient marked;
-    every mark in the legend."""
+    """Every run's error as its trailing RMS (thin), the RMS over runs (bold) and 2x the
+    mean h_std (dashed) versus time, on the scenario's log ``scale``; the start-up, fault
+    start and transient marked; every mark in the legend, under the plot."""
     fig, ax = plt.subplots(figsize=PLOT_SIZE)
     runs = cell.errors.shape[0]
-    for k, error in enumerate(cell.errors):
-        ax.plot(cell.time, error, color="tab:blue", linewidth=0.5, alpha=0.45,
+    trailing = trailing_errors(cell)
+    for k, error in enumerate(trailing):
+        ax.plot(cell.time, error, color="tab:blue", linewidth=0.6, alpha=0.5,
                 label=f"each run (n={runs})" if k == 0 else None)
-    ax.plot(cell.time, np.mean(cell.errors, axis=0), color="black", linewidth=1.1,
-            label="mean over runs")
-    band = COVERAGE_SIGMAS * np.mean(cell.h_std, axis=0)
-    ax.plot(cell.time, band, "r--", linewidth=0.9,
-            label=f"±{COVERAGE_SIGMAS:g} h_std (mean over runs)")
-    ax.plot(cell.time, -band, "r--", linewidth=0.9)
+    ax.plot(cell.time, np.sqrt(np.mean(trailing**2, axis=0)), color="black", linewidth=1.2,
+            label="RMS over runs")
+    ax.plot(cell.time, COVERAGE_SIGMAS * np.mean(cell.h_std, axis=0), "r--", linewidth=1.0,
+            label=f"{COVERAGE_SIGMAS:g} h_std (mean over runs)")
     ax.axvspan(cell.time[0], min(cell.startup_end, cell.time[-1]), color="0.85", linewidth=0,
                label="start-up (no max |e|, recover)")
     if scenario.fault is not None:
@@ -269,16 +280,16 @@ def cell_figure(cell: Cell, scenario: Scenario, scale: tuple[float, float]):
                    color="orange", alpha=0.2, linewidth=0, label="fault transient (no coverage)")
         ax.axvline(scenario.fault.start, color="darkorange", linewidth=1.0,
                    label=f"fault start {scenario.fault.start:g} s")
-    limit, linear = scale
-    ax.set_yscale("symlog", linthresh=linear)
-    ax.set_ylim(-limit, limit)
+    ax.set_yscale("log")
+    ax.set_ylim(*scale)
     ax.set_xlim(cell.time[0], cell.time[-1])
     ax.set_title(f"{cell.estimator} in {cell.scenario}", fontsize=10)
     ax.set_xlabel("time [s]", fontsize=9)
-    ax.set_ylabel(f"error [m] (linear within ±{linear:.2g})", fontsize=9)
+    ax.set_ylabel(f"|error| [m], RMS over {RECOVERY_WINDOW:g} s", fontsize=9)
     ax.tick_params(labelsize=8)
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=7, loc="upper left", ncols=2, framealpha=0.85)
+    ax.grid(True, which="both", alpha=0.25)
+    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.22), ncols=2,
+              frameon=False)
     fig.tight_layout()
     return fig
 
@@ -308,14 +319,27 @@ def _scenario_section(scenario: Scenario, cells: list[Cell]) -> str:
             f"<p>{esc(scenario.description)}{note}</p>{''.join(plots)}")
 
 
-PAGE_STYLE = (".heat td,.heat th{font-size:13px;padding:4px 6px;text-align:center}"
-              ".heat th{white-space:nowrap}.heat tr>th:first-child{text-align:left}"
+def _heat_maps(cells: dict[str, list[Cell]], estimators: list[str], metric: str) -> str:
+    """The heat maps of the paper scenarios and of the fault suite, one above the other (a
+    single one of 22 columns would not fit the page)."""
+    groups = (("paper scenarios", [n for n in cells if n in PAPER_SCENARIOS]),
+              ("fault suite", [n for n in cells if n not in PAPER_SCENARIOS]))
+    return "".join(f'<h3>{title}</h3><div class="wide">'
+                   f"{heat_table({n: cells[n] for n in names}, estimators, metric)}</div>"
+                   for title, names in groups if names)
+
+
+PAGE_STYLE = ("body{max-width:1240px}.heat td,.heat th{font-size:13px;padding:4px 5px;"
+              "text-align:center;white-space:nowrap}.heat td{min-width:56px}"
+              ".heat tr:first-child th{writing-mode:vertical-rl;transform:rotate(180deg);"
+              "text-align:left;vertical-align:bottom}.heat tr>th:first-child{text-align:left}"
               ".heat td a{color:#000;text-decoration:none}.heat td.best{font-weight:bold;"
-              "outline:2px solid #000}.heat td.na{background:#ddd;color:#666}"
+              "outline:2px solid #000;outline-offset:-2px}.heat td.off{background:#ddd;"
+              "color:#666}"
               ".key span{display:inline-block;padding:2px 8px;margin:0 2px;font-size:13px}"
               ".wide{overflow-x:auto}figure{display:inline-block;margin:0.4em;"
               "vertical-align:top;width:530px}figcaption{font-size:12px;color:#444}"
-              "figure img{width:530px}.na{display:inline-block;width:300px;color:#777;"
+              "figure img{width:530px;height:400px}.na{display:inline-block;width:300px;color:#777;"
               "font-size:85%;vertical-align:top;margin:1em}")
 
 
@@ -324,7 +348,9 @@ def write_html(path: Path, cells: dict[str, list[Cell]], estimators: list[str],
     """``evaluation.html``: the RMS and coverage heat maps, the table, then per scenario a
     plot per cell."""
     header = "".join(f"<th>{esc(h)}</th>" for h in COLUMNS)
-    body = "".join("<tr>" + "".join(f"<td>{esc(c)}</td>" for c in row) + "</tr>"
+    body = "".join("<tr>" + "".join(f"<td>{esc(c)}</td>" for c in row[:3])
+                   + (f'<td colspan="{len(row) - 3}">{esc(row[3])}</td>' if row[2] == NA
+                      else "".join(f"<td>{esc(c)}</td>" for c in row[3:])) + "</tr>"
                    for row in rows(cells))
     sections = "".join(_scenario_section(s, cells[s.name]) for s in scenarios)
     page = (
@@ -335,10 +361,10 @@ def write_html(path: Path, cells: dict[str, list[Cell]], estimators: list[str],
         f"a scenario reads the same sensor outputs in each run. A cell links to its plot, a "
         f"scenario to its section.</p>"
         f"<h2>RMS error [m]</h2><p class=\"note\">{esc(RMS_DEFINITION)}.</p>"
-        f"{ratio_legend()}<div class=\"wide\">{heat_table(cells, estimators, 'rms')}</div>"
+        f"{ratio_legend()}{_heat_maps(cells, estimators, 'rms')}"
         f"<h2>Coverage</h2><p class=\"note\">|e| <= {COVERAGE_SIGMAS:g} h_std outside the "
         f"fault transient: an honest h_std gives about 95 %.</p>{coverage_legend()}"
-        f"<div class=\"wide\">{heat_table(cells, estimators, 'coverage')}</div>"
+        f"{_heat_maps(cells, estimators, 'coverage')}"
         f"<h2>Every metric</h2><table><tr>{header}</tr>{body}</table>"
         f"<p class=\"note\">{esc(LEGEND)}</p>"
         f"<h2>Error versus time, per cell</h2>{sections}\n</body></html>\n")
