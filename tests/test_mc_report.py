@@ -113,3 +113,14 @@ def test_the_report_and_the_evaluation_compute_one_rms(tmp_path):
     assert report.statistics.metrics[0].rms == pytest.approx(math.sqrt(1922.5))
     assert cell.rms == pytest.approx(report.statistics.metrics[0].rms)
     assert RMS_DEFINITION in report.html.read_text().replace("&#x27;", "'")
+
+
+def test_each_mean_error_gets_its_own_axis_fitted_to_it(tmp_path, monkeypatch):
+    """Seven estimators from 0.4 m to 500 m: seven panels, the first within a metre."""
+    write_campaign(tmp_path, spread(0.4, 0.5))
+    figures = []
+    monkeypatch.setattr(plots, "_save", lambda fig, path: figures.append(fig) or path)
+    plots.plot_mean_error_versus_time(aggregate(tmp_path), tmp_path / "mean.png")
+    shown = [ax for ax in figures[0].axes if ax.get_visible()]
+    assert [ax.get_title() for ax in shown] == [f"{e} error" for e in ESTIMATORS]
+    assert shown[0].get_ylim()[1] < 1.0 < 100.0 < shown[-1].get_ylim()[1]
