@@ -6,6 +6,7 @@ import re
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+import numpy as np
 from fmpy import read_model_description
 
 
@@ -130,6 +131,9 @@ def fmu_page(fmu: Path, text: FmuText, plot: str | None) -> str:
              "the FMU's modelDescription.xml; edit those, not this file. -->", "",
              f"*{_cell(md.description)}*", "", text.body, "", "## Reference result", ""]
     own = ", ".join(f"`{panel[0]}`" for panel in run.panels)
+    if (error := error_panel(run)) is not None:
+        own += (f" and the error `{error[0]} - {error[1]}` with the ±{ERROR_SIGMAS:g} `h_std` "
+                "band the estimator claims")
     caption = (f"Component `{run.component}` of the catalog system `{run.system}` "
                f"(`models/{run.system}.ssp`, default parameters and seeds): {own}. "
                "Regenerate with `python build_fmu.py --plots`.")
@@ -154,34 +158,106 @@ def fmu_index(fmus: list[Path]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def reference_plot(run: ReferenceRun, fmu_paths: dict[str, Path], png: Path) -> Path:
-    """Run the reference system of an FMU page and plot its panels into ``png``."""
+ERROR_SIGMAS = 2.0
+"""The band drawn about an estimator's error on its page: ±2 h_std (95 % if h_std is
+honest)."""
+ERROR_PERCENTILE = 99.0
+"""The error axis spans 1.5x this percentile of |error| and of the band: the first seconds'
+wide band (an uninitialized filter's prior) are clipped, the flight's error fills the axis."""
+
+
+def error_panel(run: ReferenceRun) -> tuple[str, str] | None:
+    """(estimate, truth) of an estimator's page: its first panel starts with ``h_est`` and
+    names the truth next; None for any other FMU."""
+    first = run.panels[0]
+    return (first[0], first[1]) if first[0] == "h_est" and len(first) > 1 else None
+
+
+def _column(run: ReferenceRun, name: str) -> str:
+    return name if "." in name else f"{run.component}.{name}"
+
+
+def _label(names: list[str], units: dict[str, str]) -> str:
+    """An axis label: the panel's own variable and the unit its signals share."""
+    shared = {units.get(n, "") for n in names}
+    unit = shared.pop() if len(shared) == 1 else "mixed units"
+    return f"{names[0].partition('.')[2]} [{unit or '-'}]"
+
+
+def reference_figure(run: ReferenceRun, results):
+    """The reference plot of an FMU page: one panel per entry of ``run.panels`` (units on the
+    axes), and for an estimator its error against the truth with the ±2 h_std band it
+    claims, where an error of decimetres shows beside a flight of kilometres."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from altfusion.cosim.runner import simulate
-    from altfusion.systems import build_system
-
-    names = [name if "." in name else f"{run.component}.{name}"
-             for panel in run.panels for name in panel]
-    spec = build_system(run.system)
-    results = simulate(replace(spec, record=tuple(dict.fromkeys(names))), fmu_paths)
-    fig, axes = plt.subplots(len(run.panels), 1, sharex=True, squeeze=False,
-                             figsize=(7.0, 1.2 + 1.6 * len(run.panels)))
-    for ax, panel in zip(axes[:, 0], run.panels, strict=True):
-        for i, name in enumerate(panel):
-            column = name if "." in name else f"{run.component}.{name}"
+    error = error_panel(run)
+    count = len(run.panels) + (error is not None)
+    fig, axes = plt.subplots(count, 1, sharex=True, squeeze=False,
+                             figsize=(7.0, 1.2 + 1.7 * count))
+    axes = list(axes[:, 0])
+    for ax, panel in zip(axes, run.panels, strict=False):
+        columns = [_column(run, name) for name in panel]
+        for i, column in enumerate(columns):
             unit = results.units.get(column, "")
             ax.plot(results.time, results[column], lw=1.0 if i == 0 else 0.8,
                     ls="-" if i == 0 else "--", label=column + (f" [{unit}]" if unit else ""))
+        ax.set_ylabel(_label(columns, results.units), fontsize=8)
+    if error is not None:
+        ax = axes[-1]
+        estimate, truth = (_column(run, name) for name in error)
+        band = ERROR_SIGMAS * results[_column(run, "h_std")]
+        ax.fill_between(results.time, -band, band, color="tab:red", alpha=0.2, linewidth=0,
+                        label=f"±{ERROR_SIGMAS:g} {_column(run, 'h_std')} [m]")
+        ax.plot(results.time, results[estimate] - results[truth], lw=0.9, color="tab:blue",
+                label=f"{estimate} - {truth} [m]")
+        ax.set_ylabel("error [m]", fontsize=8)
+        settled = np.nanpercentile(np.abs(np.concatenate(
+            [results[estimate] - results[truth], band])), ERROR_PERCENTILE)
+        if np.isfinite(settled) and settled > 0:
+            ax.set_ylim(-1.5 * settled, 1.5 * settled)
+    for ax in axes:
         ax.legend(loc="best", fontsize=7)
         ax.grid(alpha=0.3)
-    axes[-1, 0].set_xlabel("time [s]")
+        ax.tick_params(labelsize=8)
+    axes[-1].set_xlabel("time [s]", fontsize=8)
     fig.suptitle(f"{run.component} in {run.system}", fontsize=9)
     fig.tight_layout()
+    return fig
+
+
+def reference_plot(run: ReferenceRun, fmu_paths: dict[str, Path], png: Path) -> Path:
+    """Run the reference system of an FMU page and plot it (:func:`reference_figure`) into
+    ``png``."""
+    import matplotlib.pyplot as plt
+
+    from altfusion.cosim.runner import simulate
+    from altfusion.systems import build_system
+
+    names = [_column(run, name) for panel in run.panels for name in panel]
+    if error_panel(run) is not None:
+        names.append(_column(run, "h_std"))
+    spec = build_system(run.system)
+    results = simulate(replace(spec, record=tuple(dict.fromkeys(names))), fmu_paths)
+    fig = reference_figure(run, results)
     png.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(png, dpi=80)
+    fig.savefig(png, dpi=90)
     plt.close(fig)
     return png
+
+
+REPLAY_SUMMARY = ("<!-- replay summary: generated by python build_fmu.py --plots (altfusion "
+                  "replay of the Auterion log); do not edit -->", "<!-- end of replay summary -->")
+"""The markers around the generated comparison table in ``docs/replay.md``."""
+
+
+def replace_generated(text: str, markers: tuple[str, str], content: str) -> str:
+    """``text`` with what lies between the two ``markers`` replaced by ``content``
+    (ValueError naming the first marker if they are missing)."""
+    begin, end = markers
+    if begin not in text or end not in text:
+        raise ValueError(f"the page lacks the markers {begin} ... {end}")
+    head, rest = text.split(begin, 1)
+    return f"{head}{begin}\n{content.strip()}\n{end}{rest.split(end, 1)[1]}"

@@ -86,8 +86,10 @@ def test_the_html_page_holds_the_heat_map_and_a_plot_per_cell_and_the_na(evaluat
     out, _ = evaluated
     page = (out / "evaluation.html").read_text()
     images = re.findall(r'<img alt="([^"]*)" src="data:image/png;base64,', page)
-    assert images == ["heat map", "BaselineKF in bao2017", "BaselineKF in xu2016_hover15",
+    assert images == ["BaselineKF in bao2017", "BaselineKF in xu2016_hover15",
                       "XuSHAEKF in xu2016_hover15"]
+    # the heat maps (RMS, coverage) link every run cell to its plot
+    assert page.count('<a href="#cell-xu2016_hover15-XuSHAEKF">') == 2
     assert "XuSHAEKF: n/a (no acc" in page
     markdown = (out / "evaluation.md").read_text()
     xu_row = next(line for line in markdown.splitlines() if line.startswith("| XuSHAEKF |"))

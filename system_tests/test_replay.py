@@ -170,6 +170,10 @@ def test_altfusion_replay_prints_the_comparison_and_writes_csv_and_plot(fmus, tm
     assert (tmp_path / f"{stem}.png").stat().st_size > 10_000
     header = (tmp_path / f"{stem}.csv").read_text().splitlines()[0]
     assert "BaselineKF.h_est [m]" in header and "replay.ekf_h [m]" in header
+    summary = (tmp_path / f"{stem}_summary.md").read_text()          # beside the plot
+    assert [line.split(" | ")[0] for line in summary.splitlines()[2:]] == [
+        "| PX4 EKF2 (reference)", "| BaselineKF", "| WhangGAEstimator"]
+    assert (tmp_path / f"{stem}_summary.csv").read_text().startswith("estimate,vs EKF2")
 
 
 def test_altfusion_replay_refuses_a_missing_log_or_an_unknown_estimator(fmus, tmp_path, capsys):

@@ -139,9 +139,9 @@ def test_summaries_count_the_runs_with_a_finite_value():
     summary = summarize([2.0, 4.0, math.inf])
     assert (summary.mean, summary.finite, summary.runs) == (3.0, 2, 3)
     assert summary.std == pytest.approx(math.sqrt(2.0))
-    assert summary.format(unit="s") == "3 ± 1.41 s (2/3)"
+    assert summary.format(unit="s") == "3 ± 1.41 s (n=2 of 3)"
     assert summarize([math.inf]).format() == "never"
-    assert summarize([0.9, 0.95]).format(percent=True) == "92.5 ± 3.5 %"
+    assert summarize([0.9, 0.95]).format(percent=True) == "92.5 ± 3.5 % (n=2)"
 
 
 def test_an_estimator_driven_by_the_accelerometer_is_na_without_one():

@@ -5,7 +5,7 @@ import re
 
 import pytest
 
-from altfusion.estimators.base import Status
+from altfusion.estimators.health import Status
 from altfusion.fmi.state import StateError, StateHeader, assemble, check_like, dump, load
 
 HEADER = StateHeader("Model", "guid", "0.1.0+x")

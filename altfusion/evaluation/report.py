@@ -1,7 +1,8 @@
 """The outputs of ``altfusion evaluate``: the text table (printed), ``evaluation.md`` (the
-matrices and the table in markdown), ``evaluation.html`` (self-contained: a heat map estimator
-x scenario coloured by RMS over the column's best, and one plot per cell as an embedded PNG)
-and ``evaluation_summary.json``."""
+matrices and the table in markdown), ``evaluation.html`` (self-contained: heat maps estimator
+x scenario of the RMS, coloured by its ratio to the column's best, and of the coverage, each
+cell linked to its plot; the table; one plot per cell as an embedded PNG) and
+``evaluation_summary.json``."""
 
 import base64
 import io
@@ -16,11 +17,16 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from altfusion.atomic import write_text  # noqa: E402
-from altfusion.evaluation.metrics import Summary  # noqa: E402
+from altfusion.evaluation.metrics import (  # noqa: E402
+    RECOVERY_WINDOW,
+    STARTUP_TIME,
+    Summary,
+    trailing_rms,
+)
 from altfusion.evaluation.run import METRICS, Cell  # noqa: E402
-from altfusion.evaluation.scenarios import Scenario  # noqa: E402
+from altfusion.evaluation.scenarios import PAPER_SCENARIOS, Scenario  # noqa: E402
 from altfusion.montecarlo.report import STYLE, esc  # noqa: E402
-from altfusion.scores import COVERAGE_SIGMAS  # noqa: E402
+from altfusion.scores import COVERAGE_SIGMAS, HONEST_COVERAGE, RMS_DEFINITION  # noqa: E402
 
 NA = "n/a"
 COLUMNS = ("scenario", "estimator", "runs", "RMS [m]", "max |e| [m]", "coverage",
@@ -65,28 +71,20 @@ def format_text(cells: dict[str, list[Cell]]) -> str:
     return "\n".join(lines) + f"\n{LEGEND}"
 
 
-LEGEND = (f"mean ± standard deviation over runs; coverage: |e| <= {COVERAGE_SIGMAS:g} h_std "
-          f"outside the fault transient; valid: h_valid true; isolate: fault start to the "
-          f"faulty source's ISOLATED bit; recover: fault start to the error back within 3x "
-          f"the nominal RMS (or h_valid false); (k/N): k of N runs; never: no run; "
-          f"-: no fault")
+LEGEND = (f"{RMS_DEFINITION}, ± the standard deviation of the per-run RMS; the other "
+          f"metrics: mean ± standard deviation over runs; (n=k): over k runs, (n=k of N): "
+          f"only k of the N runs gave a value; start-up: the first {STARTUP_TIME:g} s after "
+          f"the estimator's first fused sample; max |e|: after the start-up; coverage: "
+          f"|e| <= {COVERAGE_SIGMAS:g} h_std outside the fault transient; valid: h_valid "
+          f"true; isolate: fault start to the faulty source's ISOLATED bit; recover: fault "
+          f"start (or the end of the start-up, if later) to the error back within 3x the "
+          f"nominal RMS (or h_valid false); never: no run; -: no fault")
 
 
 def best_rms(cells: list[Cell]) -> float:
     """The column's best (smallest) mean RMS (nan if no estimator ran)."""
     values = [c.rms for c in cells if math.isfinite(c.rms)]
     return min(values) if values else math.nan
-
-
-def ratio_matrix(cells: dict[str, list[Cell]], estimators: list[str]) -> np.ndarray:
-    """RMS over the column's best: estimators (rows) x scenarios (columns), nan for n/a."""
-    matrix = np.full((len(estimators), len(cells)), np.nan)
-    for j, column in enumerate(cells.values()):
-        best = best_rms(column)
-        for cell in column:
-            if math.isfinite(cell.rms) and best > 0:
-                matrix[estimators.index(cell.estimator), j] = cell.rms / best
-    return matrix
 
 
 def _markdown_table(header: list[str], body: list[list[str]]) -> str:
@@ -141,100 +139,235 @@ def format_markdown(cells: dict[str, list[Cell]], estimators: list[str],
         + f"\n\n{LEGEND}.\n")
 
 
+PLOT_DPI = 100
+"""Per-cell plots are drawn at 100 dpi and shown at their pixel size: 9 pt text is 12.5 px."""
+PLOT_SIZE = (5.3, 4.0)
+"""Inches of a per-cell plot, legend under the axes: two side by side fill the page."""
+RATIO_STEPS = (1.0, 1.5, 3.0, 10.0, 30.0, 100.0)
+"""Colour steps of the RMS heat map, as ratios to the column's best (x1 ... x100 and over)."""
+COVERAGE_STEPS = ((0.0, "below 50 %", "#d73027"), (0.5, "50-85 %", "#fc8d59"),
+                  (HONEST_COVERAGE[0], "85-99.5 % (honest)", "#91cf60"),
+                  (HONEST_COVERAGE[1], "above 99.5 % (h_std too large)", "#9ecae1"))
+"""Colour of a coverage: (lower bound, label, colour); 85-99.5 % is the fault suite's honest
+h_std."""
+
+
 def _png(fig) -> str:
     buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=72)
+    fig.savefig(buffer, format="png", dpi=PLOT_DPI)
     plt.close(fig)
     return base64.b64encode(buffer.getvalue()).decode("ascii")
 
 
-def heat_map(cells: dict[str, list[Cell]], estimators: list[str]) -> str:
-    """The heat map as a base64 PNG: colour = RMS over the column's best (log scale), grey
-    for n/a, the mean RMS written in each cell."""
-    matrix = ratio_matrix(cells, estimators)
-    fig, ax = plt.subplots(figsize=(1.0 + 0.9 * len(cells), 0.8 + 0.45 * len(estimators)))
-    shown = np.ma.masked_invalid(np.log10(np.maximum(matrix, 1.0)))
-    colours = plt.get_cmap("RdYlGn_r").copy()
-    colours.set_bad("#cccccc")
-    image = ax.imshow(shown, cmap=colours, vmin=0.0, vmax=max(1.0, float(np.nanmax(
-        np.log10(np.maximum(matrix, 1.0)), initial=1.0))), aspect="auto")
-    for j, column in enumerate(cells.values()):
-        for cell in column:
-            i = estimators.index(cell.estimator)
-            text = NA if cell.not_applicable else (f"{cell.rms:.3g}" if math.isfinite(cell.rms)
-                                                   else "-")
-            ax.text(j, i, text, ha="center", va="center", fontsize=7)
-    ax.set_xticks(range(len(cells)), list(cells), rotation=45, ha="right", fontsize=8)
-    ax.set_yticks(range(len(estimators)), estimators, fontsize=8)
-    bar = fig.colorbar(image, ax=ax)
-    bar.set_label("log10(RMS / column's best)", fontsize=8)
-    ax.set_title("RMS error [m]; colour: RMS over the best in the scenario", fontsize=9)
-    fig.tight_layout()
-    return _png(fig)
+def cell_id(scenario: str, estimator: str) -> str:
+    """The HTML id of a cell's plot."""
+    return f"cell-{scenario}-{estimator}"
 
 
-def cell_plot(cell: Cell, scenario: Scenario) -> str:
-    """Error of every run versus time (thin), the RMS over runs (bold) and ± 2 mean h_std
-    (dashed); the fault start and transient marked."""
-    fig, ax = plt.subplots(figsize=(4.2, 2.4))
-    for error in cell.errors:
-        ax.plot(cell.time, error, color="tab:blue", linewidth=0.4, alpha=0.35)
-    ax.plot(cell.time, np.sqrt(np.mean(cell.errors**2, axis=0)), color="black",
-            linewidth=1.0, label="RMS")
-    band = COVERAGE_SIGMAS * np.mean(cell.h_std, axis=0)
-    ax.plot(cell.time, band, "r--", linewidth=0.8, label=f"±{COVERAGE_SIGMAS:g} h_std")
-    ax.plot(cell.time, -band, "r--", linewidth=0.8)
+def ratio_colour(ratio: float) -> str:
+    """The heat map's colour of an RMS ``ratio`` to the column's best: green at x1 through
+    yellow (x3-x10) to red at x100 and over, on a log scale."""
+    position = min(max(math.log10(max(ratio, 1.0)) / 2.0, 0.0), 1.0)
+    return matplotlib.colors.to_hex(plt.get_cmap("RdYlGn_r")(0.1 + 0.8 * position))
+
+
+def coverage_colour(coverage: float) -> str:
+    return next(colour for low, _, colour in reversed(COVERAGE_STEPS) if coverage >= low)
+
+
+def best_coverage(cells: list[Cell]) -> float:
+    """The column's coverage nearest the 95.4 % of an honest Gaussian h_std (nan if none)."""
+    values = [s.mean for c in cells if c.runs and (s := c.summary("coverage")) is not None
+              and math.isfinite(s.mean)]
+    honest = math.erf(COVERAGE_SIGMAS / math.sqrt(2.0))
+    return min(values, key=lambda v: abs(v - honest)) if values else math.nan
+
+
+def _heat_cell(cell: Cell, metric: str, best: float) -> str:
+    summary = cell.summary(metric) if cell.runs else None
+    if cell.not_applicable:
+        return f'<td class="off" title="{esc(cell.not_applicable)}">{NA}</td>'
+    if summary is None or not math.isfinite(summary.mean):
+        return '<td class="off">-</td>'
+    value = summary.mean
+    if metric == "rms":
+        text, colour = f"{value:.3g}", ratio_colour(value / best if best > 0 else 1.0)
+        tip = f"x{value / best:.3g} the best" if best > 0 else ""
+    else:
+        text, colour, tip = f"{100 * value:.0f} %", coverage_colour(value), ""
+    marked = value == best
+    link = f'<a href="#{esc(cell_id(cell.scenario, cell.estimator))}">{text}' \
+           f'{" ★" if marked else ""}</a>'
+    title = f"{cell.estimator} in {cell.scenario}: {summary.format(**FORMATS[metric])}" + \
+        (f", {tip}" if tip else "")
+    return (f'<td class="{"best" if marked else ""}" style="background:{colour}" '
+            f'title="{esc(title)}">{link}</td>')
+
+
+def heat_table(cells: dict[str, list[Cell]], estimators: list[str], metric: str) -> str:
+    """A heat map as an HTML table, estimators (rows) x scenarios (columns): the mean RMS
+    (coloured by its ratio to the column's best) or coverage (coloured by honesty), the
+    column's best marked ★, each cell a link to its plot and each column to its section."""
+    head = "".join(f'<th><a href="#{esc(name)}">{esc(name)}</a></th>' for name in cells)
+    best = {name: best_rms(column) if metric == "rms" else best_coverage(column)
+            for name, column in cells.items()}
+    body = []
+    for estimator in estimators:
+        row = "".join(_heat_cell(next(c for c in column if c.estimator == estimator), metric,
+                                 best[name]) for name, column in cells.items())
+        body.append(f"<tr><th>{esc(estimator)}</th>{row}</tr>")
+    return f'<table class="heat"><tr><th></th>{head}</tr>{"".join(body)}</table>'
+
+
+def ratio_legend() -> str:
+    """The RMS heat map's colour key, in ratios to the column's best."""
+    steps = "".join(f'<span style="background:{ratio_colour(r)}">x{r:g}'
+                    f'{" and over" if r == RATIO_STEPS[-1] else ""}</span>'
+                    for r in RATIO_STEPS)
+    return f'<p class="key">colour: RMS over the column\'s best {steps} ★ the best</p>'
+
+
+def coverage_legend() -> str:
+    steps = "".join(f'<span style="background:{colour}">{esc(label)}</span>'
+                    for _, label, colour in COVERAGE_STEPS)
+    return (f'<p class="key">colour: coverage {steps} ★ nearest the 95.4 % of an honest '
+            f'Gaussian h_std</p>')
+
+
+def trailing_errors(cell: Cell) -> np.ndarray:
+    """Each run's error as its RMS over the trailing :data:`RECOVERY_WINDOW` s (the quantity
+    the recovery is judged on): positive, so it reads on a log axis, and smooth enough to
+    read where a noisy error would fill the plot."""
+    return np.vstack([trailing_rms(cell.time, error, RECOVERY_WINDOW) for error in cell.errors])
+
+
+def scenario_scale(cells: list[Cell]) -> tuple[float, float]:
+    """One log y-scale (low, high) for every plot of a scenario: from half the smallest 1st
+    percentile to twice the largest 99.5th percentile of the cells' trailing RMS after the
+    start-up (a 0.4 m error and a 500 m one on the same axis)."""
+    lows, highs = [], []
+    for cell in cells:
+        if cell.errors is None:
+            continue
+        after = trailing_errors(cell)[:, cell.time >= cell.startup_end]
+        finite = after[np.isfinite(after) & (after > 0)]
+        if finite.size:
+            lows.append(float(np.percentile(finite, 1.0)))
+            highs.append(float(np.percentile(finite, 99.5)))
+    if not highs:
+        return 1e-3, 1.0
+    return max(0.5 * min(lows), 1e-4), 2.0 * max(highs)
+
+
+def cell_figure(cell: Cell, scenario: Scenario, scale: tuple[float, float]):
+    """Every run's error as its trailing RMS (thin), the RMS over runs (bold) and 2x the
+    mean h_std (dashed) versus time, on the scenario's log ``scale``; the start-up, fault
+    start and transient marked; every mark in the legend, under the plot."""
+    fig, ax = plt.subplots(figsize=PLOT_SIZE)
+    runs = cell.errors.shape[0]
+    trailing = trailing_errors(cell)
+    for k, error in enumerate(trailing):
+        ax.plot(cell.time, error, color="tab:blue", linewidth=0.6, alpha=0.5,
+                label=f"each run (n={runs})" if k == 0 else None)
+    ax.plot(cell.time, np.sqrt(np.mean(trailing**2, axis=0)), color="black", linewidth=1.2,
+            label="RMS over runs")
+    ax.plot(cell.time, COVERAGE_SIGMAS * np.mean(cell.h_std, axis=0), "r--", linewidth=1.0,
+            label=f"{COVERAGE_SIGMAS:g} h_std (mean over runs)")
+    ax.axvspan(cell.time[0], min(cell.startup_end, cell.time[-1]), color="0.85", linewidth=0,
+               label="start-up (no max |e|, recover)")
     if scenario.fault is not None:
         ax.axvspan(scenario.fault.start, scenario.fault.start + scenario.fault.transient,
-                   color="orange", alpha=0.15, linewidth=0)
-        ax.axvline(scenario.fault.start, color="orange", linewidth=0.8)
-    finite = cell.errors[np.isfinite(cell.errors)]
-    if finite.size:
-        limit = 1.2 * max(float(np.percentile(np.abs(finite), 99.5)), 1e-3)
-        ax.set_ylim(-limit, limit)
-    ax.set_title(f"{cell.estimator} - {cell.scenario}", fontsize=8)
-    ax.set_xlabel("time [s]", fontsize=7)
-    ax.set_ylabel("error [m]", fontsize=7)
-    ax.tick_params(labelsize=6)
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=6, loc="upper right")
+                   color="orange", alpha=0.2, linewidth=0, label="fault transient (no coverage)")
+        ax.axvline(scenario.fault.start, color="darkorange", linewidth=1.0,
+                   label=f"fault start {scenario.fault.start:g} s")
+    ax.set_yscale("log")
+    ax.set_ylim(*scale)
+    ax.set_xlim(cell.time[0], cell.time[-1])
+    ax.set_title(f"{cell.estimator} in {cell.scenario}", fontsize=10)
+    ax.set_xlabel("time [s]", fontsize=9)
+    ax.set_ylabel(f"|error| [m], RMS over {RECOVERY_WINDOW:g} s", fontsize=9)
+    ax.tick_params(labelsize=8)
+    ax.grid(True, which="both", alpha=0.25)
+    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.22), ncols=2,
+              frameon=False)
     fig.tight_layout()
-    return _png(fig)
+    return fig
 
 
 def _image(data: str, alt: str) -> str:
     return f'<img alt="{esc(alt)}" src="data:image/png;base64,{data}">'
 
 
+def _scenario_section(scenario: Scenario, cells: list[Cell]) -> str:
+    scale = scenario_scale(cells)
+    plots = []
+    for cell in cells:
+        anchor = esc(cell_id(cell.scenario, cell.estimator))
+        if cell.not_applicable:
+            plots.append(f'<div class="na" id="{anchor}">{esc(cell.estimator)}: {NA} '
+                         f'({esc(cell.not_applicable)})</div>')
+        elif cell.errors is not None:
+            row = dict(zip(COLUMNS, cell_row(cell), strict=True))
+            caption = "; ".join(f"{k} {v}" for k, v in row.items() if k not in (
+                "scenario", "estimator", "runs"))
+            alt = f"{cell.estimator} in {scenario.name}"
+            plots.append(f'<figure id="{anchor}">'
+                         f'{_image(_png(cell_figure(cell, scenario, scale)), alt)}'
+                         f"<figcaption>{esc(caption)}</figcaption></figure>")
+    note = f" {esc(scenario.note)}" if scenario.note else ""
+    return (f"<h3 id=\"{esc(scenario.name)}\">{esc(scenario.name)}</h3>"
+            f"<p>{esc(scenario.description)}{note}</p>{''.join(plots)}")
+
+
+def _heat_maps(cells: dict[str, list[Cell]], estimators: list[str], metric: str) -> str:
+    """The heat maps of the paper scenarios and of the fault suite, one above the other (a
+    single one of 22 columns would not fit the page)."""
+    groups = (("paper scenarios", [n for n in cells if n in PAPER_SCENARIOS]),
+              ("fault suite", [n for n in cells if n not in PAPER_SCENARIOS]))
+    return "".join(f'<h3>{title}</h3><div class="wide">'
+                   f"{heat_table({n: cells[n] for n in names}, estimators, metric)}</div>"
+                   for title, names in groups if names)
+
+
+PAGE_STYLE = ("body{max-width:1240px}.heat td,.heat th{font-size:13px;padding:4px 5px;"
+              "text-align:center;white-space:nowrap}.heat td{min-width:56px}"
+              ".heat tr:first-child th{writing-mode:vertical-rl;transform:rotate(180deg);"
+              "text-align:left;vertical-align:bottom}.heat tr>th:first-child{text-align:left}"
+              ".heat td a{color:#000;text-decoration:none}.heat td.best{font-weight:bold;"
+              "outline:2px solid #000;outline-offset:-2px}.heat td.off{background:#ddd;"
+              "color:#666}"
+              ".key span{display:inline-block;padding:2px 8px;margin:0 2px;font-size:13px}"
+              ".wide{overflow-x:auto}figure{display:inline-block;margin:0.4em;"
+              "vertical-align:top;width:530px}figcaption{font-size:12px;color:#444}"
+              "figure img{width:530px;height:400px}.na{display:inline-block;width:300px;color:#777;"
+              "font-size:85%;vertical-align:top;margin:1em}")
+
+
 def write_html(path: Path, cells: dict[str, list[Cell]], estimators: list[str],
                scenarios: list[Scenario], settings: dict) -> Path:
-    """``evaluation.html``: heat map, the table, then per scenario a plot per cell."""
+    """``evaluation.html``: the RMS and coverage heat maps, the table, then per scenario a
+    plot per cell."""
     header = "".join(f"<th>{esc(h)}</th>" for h in COLUMNS)
-    body = "".join("<tr>" + "".join(f"<td>{esc(c)}</td>" for c in row) + "</tr>"
+    body = "".join("<tr>" + "".join(f"<td>{esc(c)}</td>" for c in row[:3])
+                   + (f'<td colspan="{len(row) - 3}">{esc(row[3])}</td>' if row[2] == NA
+                      else "".join(f"<td>{esc(c)}</td>" for c in row[3:])) + "</tr>"
                    for row in rows(cells))
-    sections = []
-    for scenario in scenarios:
-        plots = []
-        for cell in cells[scenario.name]:
-            if cell.not_applicable:
-                plots.append(f'<div class="na">{esc(cell.estimator)}: {NA} '
-                             f'({esc(cell.not_applicable)})</div>')
-            elif cell.errors is not None:
-                plots.append(_image(cell_plot(cell, scenario),
-                                    f"{cell.estimator} in {scenario.name}"))
-        note = f" {esc(scenario.note)}" if scenario.note else ""
-        sections.append(f"<h3 id=\"{esc(scenario.name)}\">{esc(scenario.name)}</h3>"
-                        f"<p>{esc(scenario.description)}{note}</p>{''.join(plots)}")
+    sections = "".join(_scenario_section(s, cells[s.name]) for s in scenarios)
     page = (
         "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>altfusion evaluation"
-        f"</title><style>{STYLE}.na{{display:inline-block;width:300px;color:#777;"
-        f"font-size:85%;vertical-align:top;margin:1em}}</style></head><body>\n"
+        f"</title><style>{STYLE}{PAGE_STYLE}</style></head><body>\n"
         f"<h1>Estimator evaluation</h1><p>{settings['runs']} runs per scenario (master seed "
         f"{settings['master_seed']}, backend {esc(settings['backend'])}); every estimator of "
-        f"a scenario reads the same sensor outputs in each run.</p>"
-        f"{_image(heat_map(cells, estimators), 'heat map')}"
-        f"<table><tr>{header}</tr>{body}</table><p class=\"note\">{esc(LEGEND)}</p>"
-        f"<h2>Error versus time, per cell</h2>{''.join(sections)}\n</body></html>\n")
+        f"a scenario reads the same sensor outputs in each run. A cell links to its plot, a "
+        f"scenario to its section.</p>"
+        f"<h2>RMS error [m]</h2><p class=\"note\">{esc(RMS_DEFINITION)}.</p>"
+        f"{ratio_legend()}{_heat_maps(cells, estimators, 'rms')}"
+        f"<h2>Coverage</h2><p class=\"note\">|e| <= {COVERAGE_SIGMAS:g} h_std outside the "
+        f"fault transient: an honest h_std gives about 95 %.</p>{coverage_legend()}"
+        f"{_heat_maps(cells, estimators, 'coverage')}"
+        f"<h2>Every metric</h2><table><tr>{header}</tr>{body}</table>"
+        f"<p class=\"note\">{esc(LEGEND)}</p>"
+        f"<h2>Error versus time, per cell</h2>{sections}\n</body></html>\n")
     return write_text(path, page)
 
 

@@ -28,6 +28,7 @@ from altfusion.evaluation.metrics import (
     Summary,
     run_metrics,
     summarize,
+    summarize_rms,
 )
 from altfusion.evaluation.scenarios import (
     PAPER_SCENARIOS,
@@ -220,13 +221,17 @@ class Cell:
     errors: np.ndarray | None = None
     """Error of each run (rows) versus time (columns)."""
     h_std: np.ndarray | None = None
+    startup_end: float = math.inf
+    """When the start-up ends, s (the earliest over the runs)."""
 
     def summary(self, metric: str) -> Summary | None:
-        return summarize([getattr(run, metric) for run in self.runs])
+        values = [getattr(run, metric) for run in self.runs]
+        return summarize_rms(values) if metric == "rms" else summarize(values)
 
     @property
     def rms(self) -> float:
-        """Mean over runs of the run RMS (nan when n/a or no run)."""
+        """The RMS over runs (:data:`altfusion.scores.RMS_DEFINITION`; nan when n/a or no
+        run)."""
         summary = self.summary("rms") if self.runs else None
         return summary.mean if summary is not None else math.nan
 
@@ -262,6 +267,7 @@ def scenario_cells(out: Path, scenario: Scenario, estimators: dict[str, Estimato
             cells[name].time = runs_[0].time[:length]
             cells[name].errors = np.vstack([r.error[:length] for r in runs_])
             cells[name].h_std = np.vstack([r.h_std[:length] for r in runs_])
+            cells[name].startup_end = min(r.startup_end for r in runs_)
     return list(cells.values())
 
 

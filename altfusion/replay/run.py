@@ -16,7 +16,7 @@ from altfusion.cosim.results import Results
 from altfusion.cosim.runner import Simulation
 from altfusion.errors import UsageError
 from altfusion.replay.calibration import launch_calibration
-from altfusion.replay.compare import EstimatorReport, compare_all, settle_time
+from altfusion.replay.compare import EstimatorReport, compare_all, settle_time, write_summary
 from altfusion.replay.extract import ATTITUDE, EKF_PREFIX, LOCAL_POSITION, FlightLog
 from altfusion.replay.plot import plot_replay
 from altfusion.replay.ulog import LogReadError, read_ulog
@@ -101,7 +101,8 @@ def plan_replay(log_file: Path, estimators: list[str], fmu_paths: dict[str, Path
 
 def run_replay(plan: ReplayPlan, fmu_paths: dict[str, Path], out: Path,
                parameters: dict[str, Any] | None = None) -> ReplayRun:
-    """Run the plan to the end of the log, compare, write ``<system>.csv`` and ``.png``."""
+    """Run the plan to the end of the log, compare, write ``<system>.csv``, ``.png`` and the
+    comparison beside them (``<system>_summary.csv`` and ``_summary.md``)."""
     with Simulation(plan.spec, fmu_paths) as simulation:
         results = simulation.run(parameters=parameters or {})
     start = settle_time(results)
@@ -111,5 +112,6 @@ def run_replay(plan: ReplayPlan, fmu_paths: dict[str, Path], out: Path,
     png_path = plot_replay(results, plan.estimators, out / f"{plan.spec.name}.png",
                            f"{plan.log_file.name}: estimators vs PX4 EKF2, raw sensors and "
                            f"rangefinder", start)
+    summary = write_summary(reports, out / plan.spec.name)
     return ReplayRun(plan.log, plan.spec, results, reports, start, plan.unconnected,
-                     [csv_path, png_path])
+                     [csv_path, png_path, *summary])
