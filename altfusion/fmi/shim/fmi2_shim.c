@@ -28,8 +28,10 @@
  *  - Failures reach the host: pythonfmu is instantiated with logging on; messages of status
  *    fmi2Warning or worse reach the host's logger whatever loggingOn says, the others when the
  *    host asked for them (loggingOn, fmi2SetDebugLogging and its categories). Every call
- *    returns the worst status logged during it, so an error the Python side can only log
- *    (a refused FMU state, a failed initialization) returns fmi2Error. A state refused by
+ *    returns the worst error logged during it, so an error the Python side can only log
+ *    (a refused FMU state, a failed initialization) returns fmi2Error; a warning (a rejected
+ *    sample, a replay without a log) reaches the logger only, and the call returns fmi2OK:
+ *    OMSimulator's master stops a simulation at any doStep status but fmi2OK. A state refused by
  *    fmi2DeSerializeFMUstate (the Python object carries a `reason`) is freed and returns
  *    fmi2Error with that reason.
  *  - Instances are reused: fmi2FreeInstance resets a healthy instance (fmi2Reset) and keeps
@@ -731,7 +733,7 @@ static fmi2Status after_finalization(Instance* inst, const char* function) {
     keep_thread_state();
 #define END(status) \
     fmi2Status result = (status); /* before reading inst->worst, which the call updates */ \
-    result = worse(result, inst->worst); \
+    if (inst->worst > fmi2Warning) result = worse(result, inst->worst); \
     if (result == fmi2Fatal) inst->broken = 1; \
     return result;
 #define FORWARD(name, params, args) \
