@@ -119,13 +119,26 @@ def test_every_fmu_alone_ends_ok_at_the_hosts_default_step_and_at_0_01_s(
             {c: table[c][-1] for c in counts}
 
 
+@pytest.fixture(scope="module")
+def ssp_run(omsimulator, ssp_files):
+    """The run of a catalog system through OMSimulator's Python API (SSP_STOP, SSP_STEP),
+    made once per module: the tests of one file share an xdist worker."""
+    runs = {}
+
+    def run(system: str):
+        if system not in runs:
+            runs[system] = omsimulator.ssp(ssp_files[system], SSP_STOP, SSP_STEP)
+        return runs[system]
+    return run
+
+
 @pytest.mark.parametrize("system", SSP_NAMES)
 def test_every_catalog_ssp_runs_60_s_at_one_0_01_s_step_for_every_component(
-        omsimulator, ssp_files, record_property, capsys, system):
+        ssp_run, ssp_files, record_property, capsys, system):
     """Through OMSimulator's Python API, as it is: every component stepped at 0.01 s, each
     FMU ticking on the step_size the SSP binds; altfusion timing finds every sensor stream on
     its schedule in OMSimulator's result."""
-    run = omsimulator.ssp(ssp_files[system], SSP_STOP, SSP_STEP)
+    run = ssp_run(system)
     record_property("omsimulator_seconds", round(run.seconds, 2))
     assert run.returncode == 0, run.describe()
     assert run.calls()["simulate"] == "ok", run.describe()
@@ -136,10 +149,10 @@ def test_every_catalog_ssp_runs_60_s_at_one_0_01_s_step_for_every_component(
         assert status == 0, capsys.readouterr().out[-4000:]
 
 
-def test_yang2020_gives_our_runners_answer_in_omsimulator(omsimulator, ssp_files):
+def test_yang2020_gives_our_runners_answer_in_omsimulator(ssp_run, ssp_files):
     """The default system with unmodified FMUs, one 0.01 s step for every component: the
     estimate's RMS within RMS_FACTOR of our runner's over the same 60 s and seeds."""
-    run = omsimulator.ssp(ssp_files["yang2020"], SSP_STOP, SSP_STEP)
+    run = ssp_run("yang2020")
     assert run.returncode == 0, run.describe()
     table = run.table()
     loaded = read_ssp(ssp_files["yang2020"])
