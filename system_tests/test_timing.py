@@ -139,7 +139,8 @@ def test_a_result_without_counts_names_the_option_that_records_them(ssp_files, t
                               capsys)
     assert (status, out) == (2, "")
     assert err.startswith("error: the result records no sample count and stamp") and \
-        err.strip().endswith("run it with altfusion run --record timing")
+        err.strip().endswith("record them with altfusion run --record timing or altfusion "
+                             "timing SYSTEM.ssp --engine HOST --csv OUT.csv")
 
 
 def test_a_result_file_without_its_system_is_a_one_line_error(our_csv, capsys):
