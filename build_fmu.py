@@ -6,6 +6,7 @@ its FMUs); validate them; regenerate the generated documentation.
     python build_fmu.py --force    rebuild everything
     python build_fmu.py --check    exit 1 if a built FMU is missing or older than its sources
     python build_fmu.py --plots    also rerun the FMU pages' reference plots (docs/fmus/*.png)
+                                   and the replay of docs/replay.md (its plot and table)
 
 Every FMU bundles a private copy of the ``altfusion`` modules its slave script needs, under a
 name of its own (``altfusion.fmi.bundle``: PythonFMU issue #228), and its linux64 binary is
@@ -92,7 +93,7 @@ def build_fmu(script: Path, dest: Path = MODELS, core: Path | None = None,
     fmu = Path(FmuBuilder.build_FMU(
         staged, dest=dest, project_files=[core, *bundled_files(script)],
         canGetAndSetFMUstate=True, canSerializeFMUstate=True,
-        canHandleVariableCommunicationStepSize=False,
+        canHandleVariableCommunicationStepSize=True,
     ))
     install_shim(fmu, shim)
     return fmu
@@ -127,11 +128,39 @@ def write_if_changed(path: Path, text: str) -> None:
         print(f"wrote {path.relative_to(HERE)}")
 
 
+def replay_docs(log: Path, fmu_paths: dict[str, Path], png: Path, page: Path) -> None:
+    """Replay ``log`` with every catalog estimator as ``altfusion replay`` does, copy its
+    plot to ``png`` and its summary table into ``page`` between the markers
+    ``altfusion.docs.REPLAY_SUMMARY`` (here, since the docs generator sits beside replay/ in
+    the layers and may not import it)."""
+    import shutil
+    import tempfile
+
+    from altfusion.atomic import write_text
+    from altfusion.docs import REPLAY_SUMMARY, replace_generated
+    from altfusion.estimators.registry import ESTIMATOR_CLASSES
+    from altfusion.replay.run import plan_replay, run_replay
+
+    with tempfile.TemporaryDirectory(prefix="altfusion_replay_docs_") as folder:
+        replay = run_replay(plan_replay(log, list(ESTIMATOR_CLASSES), fmu_paths), fmu_paths,
+                            Path(folder))
+        plot = next(f for f in replay.files if f.suffix == ".png")
+        table = next(f for f in replay.files if f.name.endswith("_summary.md")).read_text()
+        shutil.copyfile(plot, png)
+    write_text(page, replace_generated(page.read_text(), REPLAY_SUMMARY, table))
+
+
 def build_docs(fmu_paths: dict[str, Path], plots: bool = False) -> None:
     """The FMU reference, one page per FMU (its text in ``fmu_src/docs/``; its reference plot
-    rerun only with ``plots``: it simulates a catalog system per FMU) and the controller
-    design."""
-    from altfusion.docs import fmu_index, fmu_page, fmu_reference, read_fmu_text, reference_plot
+    rerun only with ``plots``: it simulates a catalog system per FMU), the controller design
+    and, with ``plots``, the replay of docs/replay.md (its plot and table: 20 s)."""
+    from altfusion.docs import (
+        fmu_index,
+        fmu_page,
+        fmu_reference,
+        read_fmu_text,
+        reference_plot,
+    )
     from altfusion.physics.controller_design import design, report
 
     fmus = sorted(fmu_paths.values())
@@ -145,6 +174,10 @@ def build_docs(fmu_paths: dict[str, Path], plots: bool = False) -> None:
         page = fmu_page(fmu, text, png.name if png.exists() else None)
         write_if_changed(DOCS / "fmus" / f"{fmu.stem}.md", page)
     write_if_changed(DOCS / "controller_design.md", report(design()))
+    if plots:
+        replay_docs(HERE / "tests" / "data" / "flightlogs" / "auterion_esc_status_log.ulg",
+                    fmu_paths, DOCS / "replay_auterion.png", DOCS / "replay.md")
+        print("wrote docs/replay_auterion.png, docs/replay.md")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -153,7 +186,8 @@ def main(argv: list[str] | None = None) -> int:
                         help="exit 1 if an FMU is missing or older than its sources")
     parser.add_argument("--force", action="store_true", help="rebuild every FMU")
     parser.add_argument("--plots", action="store_true",
-                        help="rerun the reference plots of the FMU pages (about 35 s)")
+                        help="rerun the reference plots of the FMU pages and the replay of "
+                             "docs/replay.md (about 1 min)")
     args = parser.parse_args(argv)
     from altfusion.fmi.shim import ShimBuildError, compile_shim
 

@@ -4,8 +4,8 @@ The core numerics (``physics``, ``sensors``, ``estimators``) are plain Python + 
 import no FMI code. FMI lives at three edges:
 
 * ``altfusion.fmi``: the pythonfmu adapter base every FMU's slave script builds on;
-* ``altfusion.cosim``: our multi-rate runner on fmpy and the SSP reader/writer (its plain-data
-  system description, ``altfusion.cosim.system``, imports no FMI library);
+* ``altfusion.cosim``: our multi-rate runner on fmpy and the SSP reader/writer of the
+  plain-data system descriptions of ``altfusion.systems`` (which import no FMI library);
 * ``altfusion.interop``: third-party engines (libcosim, ECOS), OSP export, FMU containers and
   compliance checks (the ``interop`` extra, imported only when used).
 

@@ -3,24 +3,29 @@
 import argparse
 import math
 import os
+import signal
 import sys
 from dataclasses import replace
 from pathlib import Path
 from typing import NoReturn
 
 from altfusion.cosim.instances import CosimError
-from altfusion.cosim.runner import RunFailedError, Simulation
+from altfusion.cosim.runner import RunFailedError, RunInterruptedError, Simulation
 from altfusion.cosim.settings import parse_settings
 from altfusion.cosim.ssp import LoadedSystem, read_ssp
 from altfusion.errors import ParameterError, UsageError
+from altfusion.estimators.registry import ESTIMATOR_CLASSES
+from altfusion.evaluation.command import add_command as add_evaluate_command
 from altfusion.montecarlo.commands import add_commands as add_montecarlo_commands
-from altfusion.montecarlo.evaluate_command import add_command as add_evaluate_command
-from altfusion.replay.system import CATALOG_ESTIMATORS
 from altfusion.timing.command import add_command as add_timing_command
 from altfusion.timing.command import with_timing_record
 
 INCOMPLETE = ".incomplete"
-"""Suffix before '.csv'/'.png' of the results of a run that failed part way."""
+"""Suffix before '.csv'/'.png' of the results of a run that failed or was interrupted part
+way."""
+
+INTERRUPTED = 130
+"""Exit status after Ctrl-C (128 + SIGINT), as ``altfusion mc``'s."""
 
 
 def output_folder(out: str | Path) -> Path:
@@ -36,6 +41,7 @@ def output_folder(out: str | Path) -> Path:
 
 
 def command_run(args: argparse.Namespace) -> int:
+    from altfusion.health_events import format_events, health_events, write_events
     from altfusion.plotting import plot_results
     from altfusion.summary import format_summary
 
@@ -48,28 +54,71 @@ def command_run(args: argparse.Namespace) -> int:
         spec = with_timing_record(spec, loaded.fmu_paths)
     out = output_folder(args.out)
     failure = None
-    with Simulation(spec, loaded.fmu_paths, backend=args.backend) as simulation:
+    with Interrupts() as interrupts, \
+            Simulation(spec, loaded.fmu_paths, backend=args.backend) as simulation:
+        interrupts.watch(simulation)
         try:
             results = simulation.run(stop_time=args.stop, parameters=settings)
         except RunFailedError as error:
             failure, results = error, error.results
+        except ParameterError as error:
+            if error.name == "stop_time" and args.stop is not None:
+                raise UsageError(f"--stop {args.stop:g}: {error.reason}") from error
+            raise
     stem = f"{spec.name}{INCOMPLETE}" if failure else spec.name
     csv_path = results.to_csv(out / f"{stem}.csv")
     files = [str(csv_path)]
     if len(results.time) > 1:
         files.append(str(plot_results(results, out / f"{stem}.png", spec.name,
                                       spec.description)))
+    events = health_events(results)
+    if events:
+        files.append(str(write_events(events, out / f"{stem}.events.csv")))
     print(f"{spec.name}: {spec.description}")
     print(f"simulated {results.time[0]:g} s to {results.time[-1]:g} s "
           f"({len(spec.components)} components, base step {spec.base_step:g} s)\n")
     if len(results.time) > 1:
         print(format_summary(results, spec.metrics))
-    print(f"\nwrote {' and '.join(files)}")
+    if events:
+        print(f"\n{format_events(events, files[-1])}")
+    print(f"\nwrote {', '.join(files)}")
+    if isinstance(failure, RunInterruptedError):
+        print(f"error: {failure}, results so far written (marked {INCOMPLETE})",
+              file=sys.stderr)
+        return INTERRUPTED
     if failure:
         print(f"error: run failed after t = {results.time[-1]:g} s, results so far written "
               f"(marked {INCOMPLETE}): {one_line(failure)}", file=sys.stderr)
         return 1
     return 0
+
+
+class Interrupts:
+    """Ctrl-C (SIGINT) noted, never raised, while a simulation runs: a KeyboardInterrupt
+    raised inside an FMU's Python code would become that FMU's fmi2Fatal. Every press asks the
+    watched simulation to stop after its current base step (:meth:`Simulation.interrupt`)."""
+
+    def __init__(self) -> None:
+        self.simulation: Simulation | None = None
+        self.requested = False
+
+    def __enter__(self) -> "Interrupts":
+        self._previous = signal.signal(signal.SIGINT, self._note)
+        return self
+
+    def __exit__(self, *_exc) -> None:
+        signal.signal(signal.SIGINT, self._previous)
+
+    def _note(self, _signum, _frame) -> None:
+        self.requested = True
+        if self.simulation is not None:
+            self.simulation.interrupt()
+
+    def watch(self, simulation: Simulation) -> None:
+        """Stop ``simulation`` on Ctrl-C (at once if it was pressed while it was built)."""
+        self.simulation = simulation
+        if self.requested:
+            simulation.interrupt()
 
 
 def apply_fault(ssp: Path, loaded: LoadedSystem, fault: str) -> LoadedSystem:
@@ -87,6 +136,7 @@ def apply_fault(ssp: Path, loaded: LoadedSystem, fault: str) -> LoadedSystem:
 
 
 def command_replay(args: argparse.Namespace) -> int:
+    from altfusion.health_events import format_events, health_events, write_events
     from altfusion.replay.compare import format_table, sample_counts
     from altfusion.replay.run import plan_replay, run_replay
     from altfusion.replay.ulog import LogReadError
@@ -121,7 +171,11 @@ def command_replay(args: argparse.Namespace) -> int:
           f"a common datum (mean removed); GPS innov = gps_h - prior h; NIS over h_std² + "
           f"epv²; h-range = implied ground height, flat ground.\n")
     print(format_table(replay.reports))
-    print(f"\nwrote {' and '.join(str(f) for f in replay.files)}")
+    events = health_events(replay.results)
+    files = [*replay.files, write_events(events, Path(args.out) / f"{replay.spec.name}"
+                                                                   f".events.csv")]
+    print(f"\n{format_events(events, str(files[-1]))}")
+    print(f"\nwrote {', '.join(str(f) for f in files)}")
     return 0
 
 
@@ -165,7 +219,7 @@ def build_parser() -> argparse.ArgumentParser:
     replay = commands.add_parser(
         "replay", help="run estimators on a PX4 flight log (ULog), compare with PX4 EKF2")
     replay.add_argument("log", type=Path, help="PX4 ULog file (.ulg)")
-    replay.add_argument("--estimators", default=",".join(CATALOG_ESTIMATORS),
+    replay.add_argument("--estimators", default=",".join(ESTIMATOR_CLASSES),
                         help="comma-separated estimator FMU names (default: %(default)s)")
     replay.add_argument("--models", default="models", help="folder of the built FMUs")
     replay.add_argument("--out", default="results", help="output folder (default: results)")
@@ -240,6 +294,11 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return args.handler(args)
+    except KeyboardInterrupt:
+        if args.debug:
+            raise
+        print("error: interrupted", file=sys.stderr)
+        return INTERRUPTED
     except USER_ERRORS as error:
         if args.debug:
             raise

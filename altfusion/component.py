@@ -1,12 +1,13 @@
 """The base of every core model: parameters, an exact tick clock, inputs and outputs.
 
-A component is a discrete-time system on a fixed step. Its inputs and outputs are plain
+A component is a discrete-time system on a fixed step, its tick. Its inputs and outputs are plain
 attributes named as in the signal contract (``docs/signals.md``); the FMU adapter
 and the runner's direct (no-FMI) backend both map variables onto these attributes by name.
 Subclasses give their inputs default values before calling ``Component.__init__``, which
 applies any ``inputs`` given, validates the parameters and sets the initial state: a component
-that exists is always valid. ``do_step`` checks the requested time against the tick count and calls
-:meth:`update`, which advances exactly one step.
+that exists is always valid. ``do_step`` takes any communication step: it checks the requested
+time against where the last step ended and calls :meth:`update`, which advances exactly one
+tick, for each tick within the step (inputs held over the step).
 """
 
 from abc import ABC, abstractmethod
@@ -67,6 +68,12 @@ class Component(ABC):
         """
         return None
 
+    @classmethod
+    def natural_step(cls, params: Any) -> float | None:
+        """The longest tick that fits ``params`` (a sensor's sample period, offset and
+        latency), for an FMU whose host step does not; None: no such constraint."""
+        return None
+
     @abstractmethod
     def reset(self) -> None:
         """Set the initial state and outputs from the parameters (t = start time)."""
@@ -76,9 +83,18 @@ class Component(ABC):
         """Advance one step; ``self.time`` is already the end of the step."""
 
     def do_step(self, current_time: float, step_size: float) -> None:
-        """Advance from ``current_time`` by ``step_size`` (which must equal the step)."""
-        self.clock.advance(current_time, step_size)
-        self.update()
+        """Advance from ``current_time`` by any positive ``step_size``: :meth:`update` once
+        for each tick of the component's step that falls within it (none for a step shorter
+        than what is left of the current tick; see :mod:`altfusion.timegrid`)."""
+        clock = self.clock
+        due = clock.due(current_time, step_size)
+        if due == 1:                            # the usual request: the fast path
+            clock.tick()
+            self.update()
+            return
+        for _ in range(due):
+            clock.tick()
+            self.update()
 
     def note(self, message: str) -> None:
         """Record a warning (an ignored sample, a rejected outlier...) for the host to log."""

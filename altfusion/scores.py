@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from altfusion.estimators.base import SourceBit, source_bit
+from altfusion.estimators.health import SourceBit, source_bit
 
 COVERAGE_SIGMAS = 2.0
 """|e| <= 2 h_std: 95.4 % of the time for a Gaussian error with an honest h_std."""
@@ -61,6 +61,22 @@ def rms(error: np.ndarray, mask: np.ndarray) -> float:
     return float(np.sqrt(np.mean(error[mask] ** 2))) if mask.any() else math.nan
 
 
+RMS_DEFINITION = ("RMS over runs: the square root of the mean, over the runs, of each run's "
+                  "mean squared error (h_est - truth) over the rows where the estimator is "
+                  "initialized (status bit INITIALIZED; every row when no status is "
+                  "recorded); each run weighs the same")
+"""The one RMS of an estimator over several runs, on every page (``altfusion evaluate``'s
+page and table, ``altfusion report``'s table): :func:`pooled_rms` of the runs' mean
+squares."""
+
+
+def pooled_rms(mean_squares: np.ndarray) -> float:
+    """The RMS over runs (:data:`RMS_DEFINITION`) from each run's mean squared error; NaN
+    without a run or with a non-finite run."""
+    mean_squares = np.asarray(mean_squares, dtype=float)
+    return float(np.sqrt(np.mean(mean_squares))) if mean_squares.size else math.nan
+
+
 def window_rms(time: np.ndarray, error: np.ndarray, valid: np.ndarray | None,
                start: float, end: float = math.inf) -> float:
     """RMS of the valid samples of ``error`` in [start, end); NaN if there is none."""
@@ -82,3 +98,33 @@ def recovered(time: np.ndarray, error: np.ndarray, valid: np.ndarray,
     if math.isnan(faulty):
         return True, faulty, nominal
     return bool(faulty <= RECOVERY_FACTOR * nominal), faulty, nominal
+
+
+MAX_HEIGHT_RESETS = 1
+"""docs/faults.md, ``all_fail`` (PX4 EKF2's *AllHgtFailReset*): at most one height reset."""
+
+
+def follows_reference(time: np.ndarray, error: np.ndarray, resets: np.ndarray,
+                      nominal_error: np.ndarray, nominal_valid: np.ndarray,
+                      reference_offset: float, start: float, after: float,
+                      ) -> tuple[bool, str]:
+    """docs/faults.md's ``all_fail`` criterion for an estimator whose height reference is a
+    failed source and which has no third height sensor in range (PX4 EKF2's
+    *AllHgtFailReset*): from ``after`` on, the RMS error within ``reference_offset`` (the
+    reference's own offset) plus :data:`RECOVERY_FACTOR` times the nominal RMS over the
+    same window, at most :data:`MAX_HEIGHT_RESETS` height reset (``resets``: the
+    estimator's reset counter) from ``start`` on, no NaN; ``h_valid`` may stay true.
+    (passed, what was measured)."""
+    if not np.all(np.isfinite(error)):
+        return False, "NaN or infinite error"
+    window = time >= after
+    nominal = window_rms(time, nominal_error, nominal_valid, after)
+    faulty = rms(error, window)
+    bound = abs(reference_offset) + RECOVERY_FACTOR * nominal
+    resets = np.asarray(resets)
+    before = resets[time < start]
+    reset_count = int(resets[-1] - (before[-1] if before.size else 0.0))
+    passed = faulty <= bound and reset_count <= MAX_HEIGHT_RESETS
+    return bool(passed), (f"RMS {faulty:.3g} m against |offset| {abs(reference_offset):g} m + "
+                          f"3 x nominal {nominal:.3g} m = {bound:.3g} m; {reset_count} height "
+                          f"reset(s)")

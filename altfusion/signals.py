@@ -47,3 +47,20 @@ SIGNALS: dict[str, tuple[type, str | None, str]] = {
     "n_height_resets": (int, None, "Height resets so far (every height source disagreed with "
                                    "the prediction)"),
 }
+
+LOG_STREAMS: dict[str, tuple[tuple[str, ...], str | None]] = {
+    "baro": (("baro_h", "baro_p", "baro_T"), None),
+    "gps": (("gps_h", "gps_vz", "gps_vdop", "gps_nsat", "gps_epv"), "gps_fix"),
+    "acc": (("acc_z",), None),
+    "laser": (("laser_h",), "laser_valid"),
+    "radar": (("radar_h",), "radar_valid"),
+    "ekf": (("ekf_h", "ekf_vz"), "ekf_valid"),
+}
+"""The streams LogReplay delivers from a flight log (:mod:`altfusion.replay.component`): per
+stream prefix, its values and its validity flag (None: always valid)."""
+
+LOG_OUTPUTS: tuple[str, ...] = tuple(
+    name for prefix, (values, valid) in LOG_STREAMS.items()
+    for name in (*values, *((valid,) if valid else ()), f"{prefix}_count", f"{prefix}_time")
+)
+"""Every output of LogReplay, contract names, in declaration order."""

@@ -3,7 +3,8 @@
 import numpy as np
 
 from altfusion.cosim.results import Results
-from altfusion.cosim.system import Metric
+from altfusion.health_events import status_names
+from altfusion.systems.spec import Metric
 
 
 def metric_rows(results: Results, metrics: tuple[Metric, ...]) -> list[tuple[str, float, ...]]:
@@ -28,5 +29,20 @@ def format_summary(results: Results, metrics: tuple[Metric, ...]) -> str:
     lines.append(f"{'signal':<34}{'final':>12}{'min':>12}{'max':>12}")
     for name, values in results.columns.items():
         label = results.header(name)
-        lines.append(f"{label:<34}{values[-1]:12.5g}{values.min():12.5g}{values.max():12.5g}")
+        if name.endswith(".status") and np.all(np.isfinite(values)):
+            lines.append(f"{label:<34}{status_words(values)}")
+        else:
+            lines.append(f"{label:<34}{values[-1]:12.5g}{values.min():12.5g}"
+                         f"{values.max():12.5g}")
     return "\n".join(lines)
+
+
+def status_words(values: np.ndarray) -> str:
+    """An estimator's ``status`` column decoded by bit name: the final bits, then those set
+    at some time but not at the end (``docs/estimator_health.md``)."""
+    bits = values.astype(np.int64)
+    final = status_names(int(bits[-1]))
+    seen = [name for name in status_names(int(np.bitwise_or.reduce(bits)))
+            if name not in final]
+    return (f"  final {' '.join(final) or 'none'}"
+            + (f"; also seen {' '.join(seen)}" if seen else ""))

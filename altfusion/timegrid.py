@@ -3,12 +3,21 @@
 A step size such as 0.01 s is taken as the decimal it was written as (1/100), so
 ``time(n)`` is the exact rational n·step rounded once to a float, and durations
 (sample periods, offsets, latencies) are checked to be exact multiples of the step.
+
+A component ticks on this grid whatever its host's communication steps: a doStep over
+(t, t + h] runs every tick whose time falls within it, a tick within ``TICK_TOLERANCE`` of a
+tick's length after the step's end included (hosts add floats: 1000 steps of 0.01 s end at
+9.999999999999831 s). A step shorter than a tick may run none (a host's 1e-13 s remainder
+before its stop time), a step longer than a tick runs several.
 """
 
 import math
 from fractions import Fraction
 
 from altfusion.errors import ParameterError, StepError
+
+TICK_TOLERANCE = 1e-3
+"""How close (in ticks) a step's end or start must come to a tick's time to count as it."""
 
 
 def exact(value: float) -> Fraction:
@@ -33,10 +42,13 @@ class TickClock:
         self._start_num = start.numerator * (self._den // start.denominator)
         self._step = step
         self._step_tolerance = 1e-9 * self.step_size
-        self._time_tolerance = 1e-3 * self.step_size
+        self._time_tolerance = TICK_TOLERANCE * self.step_size
+        self._start_time = float(start_time)
         self.ticks = 0
         self.now = self.time(0)
-        """The current time, s (:meth:`time` of the current tick, kept at each advance)."""
+        """The current time, s (:meth:`time` of the current tick, kept at each tick)."""
+        self._on_grid = True
+        self._host_end = self.now
 
     def time(self, ticks: int | None = None) -> float:
         """Time at ``ticks`` steps after the start (default: the current tick), in s."""
@@ -59,19 +71,35 @@ class TickClock:
             raise ParameterError(name, duration, "must be > 0")
         return int(quotient)
 
-    def advance(self, current_time: float, step_size: float) -> int:
-        """Check a doStep(current_time, step_size) request and move one tick ahead."""
-        if abs(step_size - self.step_size) > self._step_tolerance:
-            raise StepError(
-                f"communication step {step_size!r} s differs from parameter "
-                f"step_size = {self.step_size!r} s"
-            )
-        expected = self.now
-        if abs(current_time - expected) > self._time_tolerance:
-            raise StepError(
-                f"doStep at t = {current_time!r} s, but this component is at t = {expected!r} s"
-            )
+    def due(self, current_time: float, step_size: float) -> int:
+        """Check a doStep(current_time, step_size) request and return how many ticks it runs.
+
+        The usual request, one tick from the current tick, takes the first test. Otherwise
+        ``current_time`` must be where the previous request ended (within the tolerance) and
+        ``step_size`` positive and finite; the request ends at ``current_time + step_size``.
+        """
+        if (self._on_grid and abs(step_size - self.step_size) <= self._step_tolerance
+                and abs(current_time - self.now) <= self._time_tolerance):
+            return 1
+        if not (step_size > 0.0 and math.isfinite(step_size)):
+            raise StepError(f"communication step {step_size!r} s: must be positive and finite")
+        if abs(current_time - self.host_time) > self._time_tolerance:
+            raise StepError(f"doStep at t = {current_time!r} s, but this component is at "
+                            f"t = {self.host_time!r} s")
+        end = current_time + step_size
+        last = max(self.ticks,
+                   math.floor((end - self._start_time) / self.step_size + TICK_TOLERANCE))
+        # A step ending on a tick puts the host back on the grid (the fast path again).
+        self._on_grid = abs(end - self.time(last)) <= self._time_tolerance
+        self._host_end = end
+        return last - self.ticks
+
+    @property
+    def host_time(self) -> float:
+        """Where the host's last doStep ended, s (:attr:`now` while it steps on the grid)."""
+        return self.now if self._on_grid else self._host_end
+
+    def tick(self) -> None:
+        """Move one tick ahead."""
         self.ticks += 1
         self.now = (self._start_num + self.ticks * self._step_num) / self._den
-        return self.ticks
-

@@ -2,7 +2,7 @@
 
     python benchmarks/altitude_ekf_cost.py [--stop T] [--repeat N]
 
-Both estimators fly seed 003's closed loop (``yang2020`` and ``yang2020_altitude_ekf``:
+Both estimators fly yang2020's closed loop (``yang2020`` and ``yang2020_altitude_ekf``:
 baro and accelerometer every 10 ms, GPS every 100 ms, radio altimeter every 200 ms, the
 estimator stepped every 10 ms), so each sees the same streams. Printed: the CPU time per
 do_step of the estimator component,

@@ -4,7 +4,7 @@ Each paper system of the catalog gets AltitudeEKF as an observer component ``ekf
 the same sensor outputs with ``systems.wiring.estimator_connections``, stepped with the
 paper's estimator; in the closed loops the aircraft still flies on the paper's estimate),
 configured as ``altfusion evaluate`` configures it: the sensors' true noises by their contract
-names (``evaluate_scenarios.sensor_noise``) and the system's sensor error models
+names (``evaluation.scenarios.sensor_noise``) and the system's sensor error models
 (``systems.error_models.SENSOR_ERRORS``, the one table both use). Both estimators see the same
 seeded sensor samples. Printed per scenario: the height RMS error of the paper's estimator
 and of AltitudeEKF over all runs, and AltitudeEKF's coverage, the share of samples with
@@ -21,11 +21,11 @@ from pathlib import Path
 import numpy as np
 
 from altfusion.cosim import Simulation
-from altfusion.cosim.system import ComponentSpec
 from altfusion.estimators.altitude_ekf import AltitudeEKF
-from altfusion.montecarlo.evaluate_scenarios import sensor_noise
+from altfusion.evaluation.scenarios import sensor_noise
 from altfusion.systems import build_system
 from altfusion.systems.error_models import SENSOR_ERRORS
+from altfusion.systems.spec import ComponentSpec
 from altfusion.systems.wiring import estimator_connections
 
 MODELS = Path(__file__).resolve().parent.parent / "models"

@@ -18,7 +18,7 @@ import numpy as np
 
 from altfusion import scores
 from altfusion.cosim import Simulation
-from altfusion.replay.system import CATALOG_ESTIMATORS
+from altfusion.estimators.registry import ESTIMATOR_CLASSES
 from altfusion.systems import SYSTEMS, build_system
 
 MODELS = Path(__file__).resolve().parents[1] / "models"
@@ -28,7 +28,7 @@ PAPER_SYSTEMS = ("whang2008", "whang2008_baseline", "hajiyev", "hajiyev_drift", 
 
 
 def estimator_components(system) -> list[str]:
-    return [c.name for c in system.components if c.fmu in CATALOG_ESTIMATORS]
+    return [c.name for c in system.components if c.fmu in ESTIMATOR_CLASSES]
 
 
 def measure(name: str, fmus: dict[str, Path]) -> list[tuple[str, str, float, float, float]]:

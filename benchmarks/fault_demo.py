@@ -1,4 +1,4 @@
-"""The fault demonstration (``altfusion.systems.fault_demo``): seed 003's loop flown through an
+"""The fault demonstration (``altfusion.systems.fault_demo``): yang2020's loop flown through an
 accelerometer bias, a GNSS outage and a failed barometer, on AltitudeEKF and on YangFusionKF.
 
     python benchmarks/fault_demo.py [--out docs/fault_demo.png] [--backend fmu|core]
@@ -63,7 +63,7 @@ def main() -> None:
         ax.grid(alpha=0.3)
     axes[0].legend(loc="upper right", fontsize=8, ncol=4)
     axes[-1].set_xlabel("time, s")
-    fig.suptitle(f"Seed 003's climb/cruise/descent through faults: accelerometer bias "
+    fig.suptitle(f"yang2020's climb/cruise/descent through faults: accelerometer bias "
                  f"{ACC_BIAS:g} m/s², GNSS outage, failed barometer", fontsize=11)
     fig.tight_layout()
     fig.savefig(args.out, dpi=110)

@@ -17,12 +17,12 @@ from pathlib import Path
 import numpy as np
 
 from altfusion.cosim import Simulation
-from altfusion.replay.system import CATALOG_ESTIMATORS
+from altfusion.estimators.registry import ESTIMATOR_CLASSES
 from altfusion.scores import coverage, isolation_time, recovered, window_rms
 from altfusion.systems.faults import FAULTS, fault_flight, run_parameters, with_fault
 
 MODELS = Path(__file__).resolve().parents[1] / "models"
-ESTIMATORS = tuple(CATALOG_ESTIMATORS)
+ESTIMATORS = tuple(ESTIMATOR_CLASSES)
 
 
 def cell(results, nominal, estimator: str, fault: str) -> str:
@@ -43,7 +43,7 @@ def cell(results, nominal, estimator: str, fault: str) -> str:
     text = f"{rms:.3g} m" if passed else f"**{rms:.3g}** m"
     text += f", cov {coverage(t, error, std, valid, excluded):.2f}"
     for source in scenario.faulty:
-        if source in CATALOG_ESTIMATORS[estimator].sources():
+        if source in ESTIMATOR_CLASSES[estimator].sources():
             seconds = isolation_time(t, results[f"{estimator}.status"], source, scenario.start)
             text += (", isolated: no" if seconds is None
                      else f", isolated in {seconds:.0f} s")

@@ -11,8 +11,9 @@ class Accelerometer(fmi.CoreSlave):
     variables = (
         fmi.Input("az", "m/s2", "True vertical acceleration, positive up"),
         fmi.Output("acc_z", "m/s2", "Measured vertical acceleration, gravity removed (held sample)",
-                   depends_on=("az",)),
+                   reads_at_step_end=("az",)),
         fmi.Output("acc_count", None, "Number of samples delivered so far", type=int,
-                   depends_on=()),
-        fmi.Output("acc_time", "s", "Time at which the held sample was taken", depends_on=()),
+                   reads_at_step_end=()),
+        fmi.Output("acc_time", "s", "Time at which the held sample was taken",
+                   reads_at_step_end=()),
     )

@@ -5,7 +5,7 @@ from altfusion.estimators import bao
 
 
 class BaoDriftEstimator(fmi.CoreSlave):
-    """Bao et al.'s barometer error correction (seed 001): principle-error and wind
+    """Bao et al.'s barometer error correction (bao2017): principle-error and wind
     corrections, and a drift Kalman filter whose R adapts to the GPS VDOP and satellite count;
     no vertical-speed estimate (vz_est = 0)."""
 
@@ -19,6 +19,7 @@ class BaoDriftEstimator(fmi.CoreSlave):
         fmi.Output("gps_std", "m", "GPS height standard deviation √R_k of the last GPS update"),
         fmi.Output("principle_error", "m", "Principle-error correction ε_p (eq. 5)"),
         fmi.Output("wind_error", "m", "Wind-disturbance correction ε_e (eq. 11)"),
-        fmi.Output("h_baro_corrected", "m", "Baro height corrected for ε_p and ε_e"),
+        fmi.Output("h_baro_corrected", "m", "Baro height corrected for ε_p and ε_e",
+                   initial_depends_on=("baro_h",)),
         fmi.Output("innovation", "m", "Innovation of the last fused GPS sample"),
-    ), core_class.extra_inputs)
+    ), core_class.extra_inputs, initial_depends_on={"h_est": ("baro_h",)})

@@ -12,8 +12,8 @@ class FlightController(fmi.CoreSlave):
     variables = (
         fmi.Input("h_fb", "m", "Altitude feedback (MSL): truth or an estimate"),
         fmi.Input("vz_fb", "m/s", "Vertical-speed feedback: truth or an estimate"),
-        fmi.Output("thrust", "N", "Thrust command", min=0.0),
-        fmi.Output("h_ref", "m", "Reference altitude (MSL)", depends_on=()),
-        fmi.Output("vz_ref", "m/s", "Reference vertical speed", depends_on=()),
-        fmi.Output("az_ref", "m/s2", "Reference vertical acceleration", depends_on=()),
+        fmi.Output("thrust", "N", "Thrust command", min=0.0, initial_depends_on=("vz_fb",)),
+        fmi.Output("h_ref", "m", "Reference altitude (MSL)", reads_at_step_end=()),
+        fmi.Output("vz_ref", "m/s", "Reference vertical speed", reads_at_step_end=()),
+        fmi.Output("az_ref", "m/s2", "Reference vertical acceleration", reads_at_step_end=()),
     )

@@ -6,7 +6,7 @@ from altfusion.estimators import hajiyev
 
 class HajiyevAdaptiveEstimator(fmi.CoreSlave):
     """Maximum-likelihood baro/GPS fusion with the adaptive filter-gain correction of
-    Hajiyev et al. (seed 002); no vertical-speed estimate (vz_est = 0)."""
+    Hajiyev et al. (hajiyev); no vertical-speed estimate (vz_est = 0)."""
 
     core_class = hajiyev.HajiyevAdaptiveEstimator
     variables = fmi.estimator_variables(core_class.streams, (
@@ -14,4 +14,4 @@ class HajiyevAdaptiveEstimator(fmi.CoreSlave):
         fmi.Output("gain", "1", "Filter gain K(k) (eqs. 16, 27)"),
         fmi.Output("residual", "m", "Residual Δ(k) = h_GPS - h_B (eq. 18)"),
         fmi.Output("normalized_residual", "1", "Normalised residual (eq. 34)"),
-    ))
+    ), initial_depends_on={"h_est": ("baro_h",), "status": ("baro_count",)})

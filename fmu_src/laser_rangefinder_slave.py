@@ -15,10 +15,11 @@ class LaserRangefinder(fmi.CoreSlave):
         fmi.Input("h", "m", "True altitude (MSL)"),
         fmi.Input("terrain_h", "m", "Terrain height under the vehicle (MSL)"),
         fmi.Output("laser_h", "m", "Measured height above the terrain, 0 when out of range "
-                   "(held frame)", depends_on=RANGE),
+                   "(held frame)", reads_at_step_end=RANGE),
         fmi.Output("laser_valid", None, "True if the held frame is within range", type=bool,
-                   depends_on=RANGE),
+                   reads_at_step_end=RANGE),
         fmi.Output("laser_count", None, "Number of frames delivered so far (valid or not)",
-                   type=int, depends_on=()),
-        fmi.Output("laser_time", "s", "Time at which the held frame was taken", depends_on=()),
+                   type=int, reads_at_step_end=()),
+        fmi.Output("laser_time", "s", "Time at which the held frame was taken",
+                   reads_at_step_end=()),
     )

@@ -24,5 +24,5 @@ class LogReplay(fmi.CoreSlave):
 
     core_class = component.LogReplay
     bundled_files = ("tests/data/flightlogs",)
-    variables = tuple(fmi.contract_output(name, depends_on=(), description=SOURCES.get(name))
-                      for name in component.OUTPUT_NAMES)
+    variables = tuple(fmi.contract_output(name, reads_at_step_end=(), description=SOURCES.get(name))
+                      for name in component.LOG_OUTPUTS)

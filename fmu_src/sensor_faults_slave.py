@@ -11,12 +11,14 @@ def _raw_input(name: str) -> fmi.Input:
 
 
 def _stream_variables(prefix: str) -> tuple:
-    """The raw inputs of stream ``prefix`` and the outputs they drive (direct feedthrough
-    from the stream's own inputs; the truth inputs enter with one step's delay)."""
+    """The raw inputs of stream ``prefix`` and the outputs they drive (read at the end of the
+    step from the stream's own inputs, and in Initialization Mode each from its raw input; the
+    truth inputs enter with one step's delay)."""
     signals = faults.stream_signals(prefix)
     own = tuple(f"raw_{name}" for name in signals)
     return (*(_raw_input(name) for name in signals),
-            *(fmi.contract_output(name, depends_on=own) for name in signals))
+            *(fmi.contract_output(name, reads_at_step_end=own,
+                                  initial_depends_on=(f"raw_{name}",)) for name in signals))
 
 
 class SensorFaults(fmi.CoreSlave):
@@ -29,5 +31,5 @@ class SensorFaults(fmi.CoreSlave):
         fmi.Input("h", "m", "True altitude (MSL): ground effect"),
         fmi.Input("thrust", "N", "Thrust: prop wash"),
         fmi.Output("fault_active", None, "True from the scenario's fault_start on (scenario "
-                   "not 'none')", type=bool, depends_on=()),
+                   "not 'none')", type=bool, reads_at_step_end=()),
     )

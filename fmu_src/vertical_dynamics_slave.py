@@ -10,8 +10,8 @@ class VerticalDynamics(fmi.CoreSlave):
     core_class = vertical_dynamics.VerticalDynamics
     variables = (
         fmi.Input("thrust", "N", "Total thrust along the vertical, held over each step", min=0.0),
-        fmi.Output("h", "m", "True altitude (MSL)", depends_on=()),
-        fmi.Output("vz", "m/s", "True vertical speed, positive up", depends_on=()),
+        fmi.Output("h", "m", "True altitude (MSL)", reads_at_step_end=()),
+        fmi.Output("vz", "m/s", "True vertical speed, positive up", reads_at_step_end=()),
         fmi.Output("az", "m/s2", "True vertical acceleration at the end of the step, positive up",
-                   depends_on=()),
+                   reads_at_step_end=(), initial_depends_on=("thrust",)),
     )

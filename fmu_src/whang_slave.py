@@ -5,7 +5,7 @@ from altfusion.estimators import whang
 
 
 class WhangGAEstimator(fmi.CoreSlave):
-    """Whang & Ra's altitude estimator (seed 000): GA filter for baro scale factor and bias
+    """Whang & Ra's altitude estimator (whang2008): GA filter for baro scale factor and bias
     from GPS and ADM temperature, baro compensation and an alpha-beta Kalman filter."""
 
     core_class = whang.WhangGAEstimator

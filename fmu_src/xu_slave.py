@@ -5,7 +5,7 @@ from altfusion.estimators import xu
 
 
 class XuSHAEKF(fmi.CoreSlave):
-    """Xu et al.'s improved Sage-Husa adaptive Kalman filter (seed 004): accelerometer-driven
+    """Xu et al.'s improved Sage-Husa adaptive Kalman filter (xu2016): accelerometer-driven
     height with the laser below 25 m and the baro above, GPS, adaptive measurement noise,
     innovation-based sensor weights and strong tracking."""
 

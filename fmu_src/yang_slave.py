@@ -5,7 +5,7 @@ from altfusion.estimators import yang
 
 
 class YangFusionKF(fmi.CoreSlave):
-    """Yang et al.'s altitude measurement (seed 003): time-unified, optimally weighted GPS,
+    """Yang et al.'s altitude measurement (yang2020): time-unified, optimally weighted GPS,
     baro and radio-altimeter heights, then a Kalman filter on height, vertical speed and
     acceleration with the GPS vertical speed and the IMU acceleration."""
 

@@ -1,6 +1,7 @@
 """System tests run whole systems of built FMUs through fmpy: build them first
 (``python build_fmu.py``); these fixtures refuse stale or missing FMUs."""
 
+import importlib.util
 import subprocess
 import sys
 from collections.abc import Callable
@@ -8,6 +9,7 @@ from pathlib import Path
 
 import pytest
 from algorithms import ALGORITHMS, PAPER_ALGORITHM
+from omsimulator import OMSimulator, unpack
 
 ROOT = Path(__file__).resolve().parents[1]
 MODELS = ROOT / "models"
@@ -47,3 +49,31 @@ def reproduce_cli(fmus) -> Callable[[str, int, Path, str], str]:
         assert completed.returncode == 0, completed.stderr[-3000:]
         return completed.stdout
     return run
+
+
+def repository_folders() -> list[Path]:
+    """This checkout and, for a git worktree, the main checkout its repository lives in."""
+    common = subprocess.run(["git", "rev-parse", "--path-format=absolute", "--git-common-dir"],
+                            cwd=ROOT, capture_output=True, text=True, check=False)
+    main = [Path(common.stdout.strip()).parent] if common.returncode == 0 else []
+    return [ROOT, *(folder for folder in main if folder != ROOT)]
+
+
+OMSIMULATOR_FOLDERS = [folder.parent / "shared" / "tools" / "omsimulator"
+                       for folder in repository_folders()]
+"""Where the prebuilt OMSimulator archive is looked for: ``../shared/tools/omsimulator``
+beside the repository (CI clones it there)."""
+
+
+@pytest.fixture(scope="session")
+def omsimulator(fmus, tmp_path_factory) -> OMSimulator:
+    """OMSimulator, unpacked once per session (per xdist worker) into a temporary folder;
+    skipped, naming where it was looked for, if no archive is there."""
+    archives = next((found for folder in OMSIMULATOR_FOLDERS
+                     if (found := sorted(folder.glob("*.tgz")))), [])
+    if not archives:
+        pytest.skip("OMSimulator is not available: no *.tgz in "
+                    f"{' or '.join(map(str, OMSIMULATOR_FOLDERS))}")
+    if importlib.util.find_spec("lxml") is None:
+        pytest.fail("OMSimulator's Python API needs lxml: pip install -e '.[test]'")
+    return unpack(archives, tmp_path_factory.mktemp("omsimulator"))

@@ -1,8 +1,8 @@
-"""AltitudeEKF through its FMU: seed 003's closed loop flown on its estimate
+"""AltitudeEKF through its FMU: yang2020's closed loop flown on its estimate
 (``yang2020_altitude_ekf``), in our ordered master and in the Jacobi master of libcosim and
 ECOS (samples one step late, fused at their stamps), and through a GNSS outage.
 
-Bounds: YangFusionKF's RMS error in the full seed 003 reproduction, 0.861 m
+Bounds: YangFusionKF's RMS error in the full yang2020 reproduction, 0.861 m
 (docs/reproduction_yang2020.md), is the paper estimator's figure AltitudeEKF must not exceed
 (issue 16); one seeded run of the scenario is compared with it.
 """
@@ -44,7 +44,7 @@ def test_in_the_jacobi_master_too(loaded, ssp_files):
     """The Jacobi master of libcosim and ECOS: every sample reaches the estimator one step
     late (fused at its stamp), and a sensor stepped at 0.1-0.2 s samples the plant at the
     start of its step but stamps the end (the same for every consumer). AltitudeEKF's RMS
-    error stays below YangFusionKF's in the same master (seed 003's loop on each)."""
+    error stays below YangFusionKF's in the same master (yang2020's loop on each)."""
     r = run(loaded, "jacobi")
     yang = run(read_ssp(ssp_files["yang2020"]), "jacobi")
     after = r.time >= 1.0

@@ -4,21 +4,20 @@ YangFusionKF: it exits with status 0 on every ``file:`` resource URI form (the F
 to a folder whose name needs a percent-escape), and every failure reaches its logger while
 ``loggingOn`` is off: a refused state (fmi2DeSerializeFMUstate returns fmi2Error), a bad
 parameter (fmi2ExitInitializationMode returns fmi2Error), a resource location that is not a
-local file URI (fmi2Instantiate returns NULL)."""
+local file URI (fmi2Instantiate returns NULL). Teardown in any order: instances freed by the
+host's exit handler, calls after the host finalized its own interpreter."""
 
 import math
 import os
 import re
 import shutil
-import site
 import subprocess
-import sys
-import sysconfig
 import zipfile
 from pathlib import Path
 from urllib.parse import quote
 
 import pytest
+from embedding import has_shared_libpython, preload_environment
 from fmpy import read_model_description
 
 SOURCE = Path(__file__).parent / "fixtures" / "c_host" / "fmi2_host.c"
@@ -39,12 +38,6 @@ VARIABLES = {
 }
 
 
-def libpython() -> Path:
-    """The interpreter's shared library, as README's recipe names it (with PYTHONHOME and
-    PYTHONPATH as there: this interpreter's installation and its site-packages, for numpy)."""
-    return Path(sysconfig.get_config_var("LIBDIR")) / sysconfig.get_config_var("LDLIBRARY")
-
-
 @pytest.fixture(scope="module")
 def host(fmus, tmp_path_factory) -> dict:
     """The compiled host, the FMUs extracted to a folder named with a space, their GUIDs and
@@ -52,7 +45,7 @@ def host(fmus, tmp_path_factory) -> dict:
     compiler = os.environ.get("CC", "cc")
     if shutil.which(compiler) is None:
         pytest.skip(f"no C compiler ('{compiler}' is not on PATH)")
-    if not sysconfig.get_config_var("Py_ENABLE_SHARED"):
+    if not has_shared_libpython():
         pytest.skip("this Python has no shared libpython for a C host to preload")
     work = tmp_path_factory.mktemp("c_host")
     folders, guids, defines = {}, {}, []
@@ -67,9 +60,7 @@ def host(fmus, tmp_path_factory) -> dict:
     binary = work / "fmi2_host"
     subprocess.run([compiler, "-O1", "-o", str(binary), str(SOURCE), *defines, "-ldl", "-lm"],
                    check=True, capture_output=True, text=True)
-    environment = {**os.environ, "LD_PRELOAD": str(libpython()), "PYTHONHOME": sys.base_prefix,
-                   "PYTHONPATH": os.pathsep.join(site.getsitepackages())}
-    return {"binary": binary, "folders": folders, "guids": guids, "env": environment}
+    return {"binary": binary, "folders": folders, "guids": guids, "env": preload_environment()}
 
 
 def uri(prefix: str, folder: Path) -> str:
@@ -159,3 +150,34 @@ def test_a_resource_location_that_is_no_local_file_uri_is_refused_naming_it(host
     assert "instantiate kf failed" in done.stdout
     assert errors_logged(done.stdout) == [
         f"fmi2Instantiate: resource location '{location}' {reason}"]
+
+
+def test_instances_freed_by_the_hosts_exit_handler_see_python_alive_and_exit_0(host):
+    """The host tears its instances down in an exit handler registered before the FMUs loaded,
+    so it runs after every handler theirs registered (OMSimulator does this): the shim keeps
+    the interpreter until then, so fmi2Terminate still runs the Python side (fmi2OK) and the
+    process exits 0 (before: the shim's handler finalized Python first, exit 139)."""
+    done = run(host, "atexit", *both(host, "file://"))
+    assert done.returncode == 0, (done.returncode, done.stdout[-2000:], done.stderr[-2000:])
+    lines = done.stdout.splitlines()
+    assert lines[-3:] == ["main returns", "status terminate at exit 0 0", "freed at exit"], lines
+    assert errors_logged(done.stdout) == []
+
+
+def test_calls_after_the_host_finalized_python_return_a_status_without_touching_it(host):
+    """An embedding host with its own interpreter finalizes it, then calls the FMUs: every call
+    that needs Python returns fmi2Error saying why, fmi2Terminate fmi2OK, fmi2FreeInstance
+    returns, and the process exits 0 (before: PyGILState_Ensure on the finalized interpreter,
+    exit 139)."""
+    done = run(host, "finalized", *both(host, "file://"))
+    assert done.returncode == 0, (done.returncode, done.stdout[-2000:], done.stderr[-2000:])
+    out = done.stdout
+    assert "worst step status 0" in out and "status finalize 0" in out
+    assert f"status get after finalization {FMI2_ERROR}" in out
+    assert f"status step after finalization {FMI2_ERROR}" in out
+    assert f"status get state after finalization {FMI2_ERROR}" in out
+    assert "status terminate after finalization 0 0" in out and out.rstrip().endswith("done")
+    errors = errors_logged(out)
+    assert [e.split(":")[0] for e in errors] == ["fmi2GetReal", "fmi2DoStep", "fmi2GetFMUstate"]
+    assert all("the Python interpreter of this process has been finalized" in e
+               for e in errors), errors

@@ -6,6 +6,7 @@ import zipfile
 from pathlib import Path
 
 import pytest
+from ulog_mutation import data_offsets, without_topic
 
 from altfusion.cli import main
 
@@ -60,7 +61,8 @@ def cases(plant: Path, tmp: Path) -> dict[str, tuple[list[str], str]]:
         "hanging sub-step": (run + ["--set", "plant.max_substep=1e-300"], "'max_substep'"),
         "stop NaN": (["run", str(plant), "--stop", "nan"], "--stop"),
         "stop negative": (["run", str(plant), "--stop", "-1"], "--stop"),
-        "stop off the grid": (["run", str(plant), "--stop", "0.0033"], "stop_time"),
+        "stop off the grid": (["run", str(plant), "--stop", "0.0033"],
+                              "--stop 0.0033: must be a multiple of the step size 0.01 s"),
         "unwritable out": (["run", str(plant), "--out", str(tmp / "a_file" / "x")], "--out"),
         "unknown command": (["nosuch"], "nosuch"),
         "unknown reproduction": (["reproduce", "nosuch"], "nosuch"),
@@ -78,7 +80,59 @@ def cases(plant: Path, tmp: Path) -> dict[str, tuple[list[str], str]]:
                                      "fault baro_step needs the baro sensor"),
         "unknown fault for mc": (["mc", str(plant), "-n", "1", "--fault", "gremlins", "--out",
                                   str(tmp / "mc")], "unknown fault 'gremlins'"),
+        "stop beyond memory": (["run", str(plant), "--stop", "1e12", "--out", str(tmp / "o")],
+                               "--stop 1e+12: recording 1.00e13 rows of"),
+        "stop beyond any array": (["run", str(plant), "--stop", "1e308", "--out",
+                                   str(tmp / "o")], "--stop 1e+308: recording 1.00e309 rows"),
+        "mc stop beyond memory": (["mc", str(plant), "-n", "1", "--stop", "1e308", "--out",
+                                   str(tmp / "mc")], "--stop 1e+308: recording 1.00e309 rows"),
+        "mc stop NaN": (["mc", str(plant), "-n", "1", "--stop", "nan", "--out",
+                         str(tmp / "mc")], "--stop nan: must be finite"),
+        "mc no runs": (["mc", str(plant), "-n", "0", "--out", str(tmp / "mc")],
+                       "-n 0: the number of runs must be >= 1"),
+        "mc negative seed": (["mc", str(plant), "-n", "1", "--seed", "-1", "--out",
+                              str(tmp / "mc")], "--seed -1: the master seed must be >= 0"),
+        "a folder": (["run", str(plant.parent)], "a folder; expected an SSP archive (a .ssp "
+                                                 "file), such as"),
+        "evaluate no runs": (["evaluate", "--runs", "0", "--models", str(plant.parent), "--out",
+                              str(tmp / "ev")], "--runs 0: expected at least 1 run"),
+        "plant mass": (run + ["--set", "plant.mass=1e-300"],
+                       "component 'plant': initialization failed: parameter 'mass' = 1e-300: "
+                       "must be >= 0.001"),
+        "no sensor data": (["replay", str(without_sensors(tmp / "nosensors.ulg")), "--models",
+                            str(plant.parent)], "nosensors.ulg: the sensor data span 0 s, less "
+                                                "than one replay step (0.01 s): the sensor "
+                                                "section is missing or damaged"),
+        "damaged sensor data": (["replay", str(damaged_sensors(tmp / "damaged.ulg")),
+                                 "--models", str(plant.parent)],
+                                "damaged.ulg: the sensor data span 1e-06 s, less than one "
+                                "replay step (0.01 s): the sensor section is missing or damaged "
+                                "(samples: vehicle_air_data 0, vehicle_gps_position 1"),
     }
+
+
+SENSOR_TOPICS = ("vehicle_air_data", "vehicle_gps_position", "sensor_combined",
+                 "distance_sensor")
+
+
+def without_sensors(target: Path) -> Path:
+    """A copy of the sample log without a data message of any sensor topic."""
+    source = LOG
+    for topic in SENSOR_TOPICS:
+        without_topic(source, target, topic)
+        source = target
+    return target
+
+
+def damaged_sensors(target: Path) -> Path:
+    """A copy of the sample log whose sensor samples are overwritten with 0xff bytes (time
+    stamps and values alike)."""
+    data = bytearray(LOG.read_bytes())
+    for topic in SENSOR_TOPICS:
+        for start, size in data_offsets(bytes(data), topic):
+            data[start + 2:start + size] = b"\xff" * (size - 2)
+    target.write_bytes(bytes(data))
+    return target
 
 
 @pytest.fixture
@@ -93,6 +147,9 @@ CASE_NAMES = [
     "stop off the grid", "unwritable out", "unknown command", "unknown reproduction",
     "missing log", "log not a ULog", "offset NaN", "offset beyond the log", "no campaign",
     "no SSP for mc", "unknown fault", "fault without its sensor", "unknown fault for mc",
+    "stop beyond memory", "stop beyond any array", "mc stop beyond memory", "mc stop NaN",
+    "mc no runs", "mc negative seed",
+    "a folder", "evaluate no runs", "plant mass", "no sensor data", "damaged sensor data",
 ]
 
 
@@ -104,6 +161,29 @@ def test_a_user_mistake_is_one_line_and_status_2(case, all_cases, capsys):
     lines = err.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error: "), err
     assert fragment in lines[0]
+
+
+@pytest.mark.parametrize("setting, message", [
+    ("air_data.height_noise_std=1e6", "'height_noise_std' = 1000000.0: must be <= 1000.0"),
+    ("air_data.drift_variance_rate=1e200", "'drift_variance_rate' = 1e+200: must be <= 100.0"),
+    ("air_data.drift_rate=1e6", "'drift_rate' = 1000000.0: must be <= 0.1"),
+    ("gnss.user_range_error=1e200", "'user_range_error' = 1e+200: must be <= 1000.0"),
+    ("gnss.velocity_noise_std=1e200", "'velocity_noise_std' = 1e+200: must be <= 100.0"),
+    ("radar.noise_std=1e200", "'noise_std' = 1e+200: must be <= 1000.0"),
+    ("laser.noise_std=1e200", "'noise_std' = 1e+200: must be <= 100.0"),
+    ("accelerometer.noise_std=1e200", "'noise_std' = 1e+200: must be <= 150.0"),
+])
+def test_noise_beyond_the_physics_is_refused_at_initialization(ssp_files, tmp_path, capsys,
+                                                               setting, message):
+    """A noise the sensor's physics cannot carry (a baro-height beyond the calibration's
+    atmosphere gave complex numbers, a GNSS error of 1e200 an infinite RMS) is refused before
+    the first step, naming the component and the parameter."""
+    status, _out, err = run_cli(["run", str(ssp_files["sensors_yang2020"]), "--stop", "1",
+                                 "--out", str(tmp_path), "--set", setting], capsys)
+    assert status == 2, err
+    component = setting.split(".")[0]
+    assert err.strip() == (f"error: component '{component}': initialization failed: "
+                           f"parameter {message}")
 
 
 def test_debug_shows_the_traceback(all_cases, capsys):

@@ -10,9 +10,9 @@ from state_restore import assert_restores_identically
 from altfusion.cosim.instances import CosimError, FmuInstance, fmu_info
 from altfusion.estimators.altitude_ekf import AltitudeEKF
 from altfusion.estimators.bao import BaoDriftEstimator
-from altfusion.estimators.base import SourceBit, Status, source_bit
 from altfusion.estimators.baseline import BaselineKF
 from altfusion.estimators.hajiyev import HajiyevAdaptiveEstimator
+from altfusion.estimators.health import SourceBit, Status, source_bit
 from altfusion.estimators.whang import WhangGAEstimator
 from altfusion.estimators.xu import XuSHAEKF
 from altfusion.estimators.yang import YangFusionKF
@@ -234,7 +234,7 @@ CORES = {"BaselineKF": BaselineKF, "HajiyevAdaptiveEstimator": HajiyevAdaptiveEs
 WILD_SAMPLES = [
     (name, value_name, value, counter) for name in ESTIMATORS for value_name, value, counter in (
         ("baro_h", 1100.0, None), ("baro_h", 1e308, "baro_rejected"),
-        ("gps_time", 1e308, "n_ignored"), ("acc_z", 1000.0, "acc_rejected"),
+        ("gps_time", 1e308, "gps_rejected"), ("acc_z", 1000.0, "acc_rejected"),
         ("gps_vz", 100.0, "gps_vz_rejected"), ("radar_h", 1100.0, "radar_rejected"))
     if value_name in CORES[name].declared_inputs()
     and (name, value_name, value) != ("WhangGAEstimator", "baro_h", 1100.0)

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from altfusion.cosim.ssp import read_ssp
+from altfusion.health_events import events_csv, health_events
 from altfusion.montecarlo.storage import finished_runs, load_run
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -85,8 +86,10 @@ def test_the_html_page_holds_the_heat_map_and_a_plot_per_cell_and_the_na(evaluat
     out, _ = evaluated
     page = (out / "evaluation.html").read_text()
     images = re.findall(r'<img alt="([^"]*)" src="data:image/png;base64,', page)
-    assert images == ["heat map", "BaselineKF in bao2017", "BaselineKF in xu2016_hover15",
+    assert images == ["BaselineKF in bao2017", "BaselineKF in xu2016_hover15",
                       "XuSHAEKF in xu2016_hover15"]
+    # the heat maps (RMS, coverage) link every run cell to its plot
+    assert page.count('<a href="#cell-xu2016_hover15-XuSHAEKF">') == 2
     assert "XuSHAEKF: n/a (no acc" in page
     markdown = (out / "evaluation.md").read_text()
     xu_row = next(line for line in markdown.splitlines() if line.startswith("| XuSHAEKF |"))
@@ -119,7 +122,7 @@ def test_an_unknown_estimator_or_scenario_is_refused_naming_the_known_ones(fmus,
 
 
 def test_fault_scenarios_put_the_fault_between_sensors_and_every_estimator(fmus):
-    from altfusion.montecarlo.evaluate_run import plan_evaluation
+    from altfusion.evaluation.run import plan_evaluation
 
     scenarios, estimators, _ = plan_evaluation(MODELS, None, ["baro_step", "range_terrain"])
     by_name = {s.name: s for s in scenarios}
@@ -136,3 +139,20 @@ def test_fault_scenarios_put_the_fault_between_sensors_and_every_estimator(fmus)
     assert "laser" in by_name["range_terrain"].not_applicable["BaselineKF"]
     assert by_name["nominal_flight"].fault is None
     assert "fault" not in {c.name for c in by_name["nominal_flight"].spec.components}
+
+
+def test_each_scenario_writes_and_summarizes_its_runs_health_events(evaluated):
+    """``<scenario>/<scenario>.events.csv`` holds every event of every stored run (what
+    :func:`health_events` reads off the run's recorded outputs), and the command says for
+    each scenario how many runs' events it summarized."""
+    out, stdout = evaluated
+    for scenario in SCENARIOS.split(","):
+        folder = out / scenario
+        expected = []
+        for index in finished_runs(folder):
+            events = health_events(load_run(folder, index).results)
+            expected += events_csv(events, {"run": [index] * len(events)}).splitlines()[1:]
+        lines = (folder / f"{scenario}.events.csv").read_text().splitlines()
+        assert lines[0] == "run,time,estimator,source,what,test_ratio,count,exact"
+        assert lines[1:] == expected and any(",initialized," in line for line in expected)
+        assert f"{scenario}: health events of 2 runs" in stdout

@@ -128,3 +128,54 @@ def test_the_state_header_names_the_fmu_its_guid_and_core_version(fmus):
     assert data.startswith(fmu_state.MAGIC)
     assert header == fmu_state.StateHeader(model="BaselineKF", guid=harness.info.guid,
                                            core_version=harness.info.core_version)
+
+
+def with_field(data: bytes, name: str, value) -> bytes:
+    """``data`` with every object attribute ``name`` set to ``value``, correctly checksummed."""
+    header, body = fmu_state.read_header(data)
+    tree = json.loads(body)
+
+    def edit(node):
+        if isinstance(node, dict):
+            if node.get("$t") == "object" and name in node["v"]:
+                node["v"][name] = value
+            for child in node.values():
+                edit(child)
+        elif isinstance(node, list):
+            for child in node:
+                edit(child)
+    edit(tree)
+    return fmu_state.assemble(header, json.dumps(tree).encode())
+
+
+@pytest.mark.parametrize("name, value, reason", [
+    ("h_est", "x", r"\.h_est is a str \('x'\) where this instance has a float"),
+    ("P", {"$t": "ndarray", "dtype": "<f8", "shape": [1], "data": "AAAAAAAAAAA="},
+     r"\.P is an array of float64 \[1\] where this instance has an array of float64 \[3, 3\]"),
+])
+def test_a_state_with_a_wrongly_typed_field_is_refused_at_set_state(fmus, name, value, reason):
+    """A correct checksum does not make a state this instance's: fmi2SetFMUstate checks it
+    field by field against the current state before replacing it (fmi2Error naming the
+    field); the instance keeps its state and steps on as if nothing happened."""
+    harness = Harness(fmus["BaselineKF"], TUNING["BaselineKF"], seed=4)
+    try:
+        for _ in range(20):
+            harness.step()
+        good = harness.instance.fmu.serializeFMUstate(harness.instance.get_state())
+        rng_state, n, counts = harness.rng.bit_generator.state, harness.n, dict(harness.counts)
+
+        def continuation():
+            harness.rng.bit_generator.state = rng_state
+            harness.n, harness.counts = n, dict(counts)
+            return [harness.step() for _ in range(CONTINUATION)]
+
+        instance = harness.instance
+        bad = instance.fmu.deSerializeFMUstate(with_field(good, name, value))
+        with pytest.raises(CosimError, match=f"setFMUstate refused the state: .*{reason}"):
+            instance.set_state(bad)
+        instance.set_state(instance.fmu.deSerializeFMUstate(good))
+        first = continuation()
+        instance.set_state(instance.fmu.deSerializeFMUstate(good))
+        assert continuation() == first
+    finally:
+        harness.free()

@@ -8,11 +8,9 @@ import subprocess
 import sys
 
 import numpy as np
-import pytest
 from fmpy import simulate_fmu
-from fmpy.fmi1 import FMICallException
 
-from altfusion.cosim.instances import CosimError, FmuInstance, fmu_info
+from altfusion.cosim.instances import FmuInstance, fmu_info
 
 FMI2_ERROR = 3
 
@@ -38,24 +36,26 @@ def test_the_default_step_size_is_the_tools_step(fmus):
     assert result["gps_count"][-1] == 10            # a fix every 0.1 s over 1 s
 
 
-def test_a_step_other_than_the_set_step_size_is_refused_with_the_reason(fmus):
+def test_a_host_step_other_than_step_size_runs_on_the_ticks_of_step_size(fmus):
+    """A 0.01 s tick under the tool's 0.05 s steps: a fix every 0.1 s, ten over 1 s."""
     messages = Messages()
-    with pytest.raises(FMICallException, match="fmi2DoStep failed with status 3"):
-        simulate_fmu(str(fmus["GnssReceiver"]), output_interval=0.05, stop_time=1.0,
-                     start_values={"step_size": 0.01}, output=["gps_h"], logger=messages)
-    assert any("communication step 0.05 s differs from parameter step_size = 0.01 s" in m
-               for m in messages.errors()), messages
+    result = simulate_fmu(str(fmus["GnssReceiver"]), output_interval=0.05, stop_time=1.0,
+                          start_values={"step_size": 0.01, "sample_period": 0.1, "h": 100.0},
+                          output=["gps_count", "gps_time"], logger=messages)
+    assert messages.errors() == []
+    assert result["gps_count"][-1] == 10
+    assert result["gps_time"][-1] == 1.0
 
 
-def test_an_adopted_step_that_does_not_fit_a_sample_period_is_refused_naming_it(fmus):
-    """The GNSS fix period 1 s is not a whole number of 0.3 s steps."""
+def test_a_first_step_that_does_not_fit_a_sample_period_falls_back_to_the_default_tick(fmus):
+    """The GNSS fix period 1 s is not a whole number of 0.3 s steps: the instance ticks
+    on 0.01 s and still fixes at 1 s, seen at the end of the step that contains it."""
     messages = Messages()
-    with pytest.raises(FMICallException, match="fmi2DoStep failed with status 3"):
-        simulate_fmu(str(fmus["GnssReceiver"]), output_interval=0.3, stop_time=1.2,
-                     output=["gps_h"], logger=messages)
-    errors = messages.errors()
-    assert errors and "step_size adopted from the first doStep (0.3 s)" in errors[0]
-    assert "sample_period" in errors[0], errors
+    result = simulate_fmu(str(fmus["GnssReceiver"]), output_interval=0.3, stop_time=1.2,
+                          output=["gps_count", "gps_time"], logger=messages)
+    assert messages.errors() == []
+    assert list(result["gps_count"]) == [0, 0, 0, 0, 1]
+    assert result["gps_time"][-1] == 1.0
 
 
 def test_log_replay_without_pyulog_logs_an_error_naming_pyulog(fmus):
@@ -80,16 +80,15 @@ def test_log_replay_without_pyulog_logs_an_error_naming_pyulog(fmus):
                                                                    completed.stderr[-2000:])
 
 
-def test_a_later_step_other_than_the_adopted_one_is_refused(fmus):
+def test_later_steps_of_any_length_follow_the_adopted_tick(fmus):
     instance = FmuInstance("gnss", fmu_info(fmus["GnssReceiver"]))
     try:
         instance.initialize({"sample_period": 0.1}, 0.0, 0.0, 1.0)    # 0: adopt
         instance.exit_initialization()
-        instance.do_step(0.0, 0.05)
-        instance.do_step(0.05, 0.05)
-        with pytest.raises(CosimError, match=r"communication step 0\.1 s differs from "
-                                             r"parameter step_size = 0\.05 s"):
-            instance.do_step(0.1, 0.1)
+        count = instance.info.variables["gps_count"].value_reference
+        for time, step in ((0.0, 0.05), (0.05, 0.05), (0.1, 0.25), (0.35, 1e-13)):
+            instance.do_step(time, step)
+        assert instance.get("Integer", [count]) == [3]        # fixes at 0.1, 0.2 and 0.3 s
     finally:
         instance.free()
 
@@ -113,7 +112,7 @@ def test_our_instances_keep_their_logger_when_the_user_runs_simulate_fmu_in_betw
         "             logger=lambda *args: None)\n"
         "gc.collect()\n"
         "try:\n"
-        "    instance.do_step(0.05, 0.1)\n"
+        "    instance.do_step(0.5, 0.1)\n"
         "except CosimError as error:\n"
         "    print(error)\n"
         "instance.free()\n"
@@ -122,5 +121,5 @@ def test_our_instances_keep_their_logger_when_the_user_runs_simulate_fmu_in_betw
                                 str(fmus["BaselineKF"])], capture_output=True, text=True,
                                timeout=120)
     assert completed.returncode == 0, completed.stderr[-2000:]
-    assert "communication step 0.1 s differs from parameter step_size = 0.05 s" in \
-        completed.stdout, completed.stdout
+    assert "doStep at t = 0.5 s, but this component is at t = 0.05 s" in completed.stdout, \
+        completed.stdout

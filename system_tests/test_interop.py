@@ -30,13 +30,7 @@ pytest.importorskip("ecospy", reason="the interop extra is not installed")
 pytest.importorskip("fmu_manipulation_toolbox", reason="the interop extra is not installed")
 
 from altfusion.constants import G0, R_AIR  # noqa: E402
-from altfusion.cosim import (  # noqa: E402
-    ComponentSpec,
-    Connection,
-    SystemSpec,
-    simulate,
-    write_ssp,
-)
+from altfusion.cosim import simulate, write_ssp  # noqa: E402
 from altfusion.cosim.runner import MASTERS  # noqa: E402
 from altfusion.interop.compliance import fmu_problems, ssp_problems  # noqa: E402
 from altfusion.interop.container import (  # noqa: E402
@@ -57,6 +51,7 @@ from altfusion.physics.profiles import make_profile  # noqa: E402
 from altfusion.sensors.air_data import AirDataParams  # noqa: E402
 from altfusion.systems import SYSTEMS, build_system  # noqa: E402
 from altfusion.systems.plant import plant_components, plant_connections  # noqa: E402
+from altfusion.systems.spec import ComponentSpec, Connection, SystemSpec  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 MODELS = ROOT / "models"
@@ -77,13 +72,13 @@ SHORT_ENGINE_RUNS = {
     **{name: 20.0 for name in ("replay_auterion", "replay_px4_sitl")},
 }
 """Shorter engine runs, s, for systems whose FMUs, rates and wiring another system's full
-run already covers, to bound CI time. The four seed 004 scenarios share their FMUs and wiring
+run already covers, to bound CI time. The four xu2016 scenarios share their FMUs and wiring
 (the heaviest systems: ten FMUs at 0.01 s) and differ only in the profile and the wind; 30 s
 covers the take-off, the laser's range and the first switch of the height source. The fault
 flight and its baro_step variant (the fault starts at 130 s, after any engine run's end), seed
 003's loop on AltitudeEKF or BaselineKF and the fault demonstration on AltitudeEKF (``yang2020``
 and ``fault_demo_yang`` run their 120 s: the same loop and fault component on YangFusionKF,
-through the GNSS outage from 100 s) and seed 003's sensors alone: 40 s covers every sensor
+through the GNSS outage from 100 s) and yang2020's sensors alone: 40 s covers every sensor
 rate, the take-off and each estimator's start. The two log replays (seven estimators at
 0.01 s, the costliest steps): 20 s covers every logged sensor's rate (the Auterion log's
 first 29 baro, 65 GNSS and 136 laser samples) and each estimator's start. The whole-system
@@ -140,13 +135,16 @@ def test_every_ssp_passes_the_ssp_and_osp_checks(ssp_files):
 
 
 def _edited_ssp(path: Path, target: Path, old: bytes, new: bytes) -> Path:
+    """A copy of ``path`` with ``old`` replaced in each of its descriptions that holds it."""
+    edited = []
     with zipfile.ZipFile(path) as source, zipfile.ZipFile(target, "w") as copy:
         for item in source.infolist():
             data = source.read(item.filename)
-            if item.filename == "SystemStructure.ssd":
-                assert old in data
+            if item.filename.endswith(".ssd") and old in data:
                 data = data.replace(old, new)
+                edited.append(item.filename)
             copy.writestr(item, data)
+    assert edited, old
     return target
 
 
@@ -390,7 +388,7 @@ def test_ordered_and_jacobi_masters_differ_by_the_derived_loop_delay(engine_runs
     [h_J(t) − h_ref(t+L·dt)] + [h_ref(t+L·dt) − h_ref(t)] − [h_O(t) − h_ref(t)]:
 
     * the middle term is at most max|vz_ref|·L·dt + ½·max|az_ref|·(L·dt)²
-      (12 m/s · 0.01 s = 0.12 m for seed 003's profile; whang2008, base step 0.05 s:
+      (12 m/s · 0.01 s = 0.12 m for yang2020's profile; whang2008, base step 0.05 s:
       10 m/s · 0.05 s = 0.5 m, measured 0.503 m against a bound of 0.504 m);
     * the last is the ordered loop's own tracking error e_O (measured: ~1.2e-4 m);
     * the first is the Jacobi loop's tracking error: e_O again, plus the loop's response to
@@ -535,7 +533,7 @@ def test_whang2008_jacobi_sensors_keep_their_errors_and_the_estimator_lags(base_
       one sensor step earlier, T_B = 0.2 s for the air data, T_G = 1 s for the GPS) agrees to
       float rounding: gps_h − h and baro_T − T_air (additive, one rounding: 2 ulps),
       baro_h − h_cal(p_static) (through pressure: the round-trip rounding of _baro_tolerance;
-      no quantization in seed 000).
+      no quantization in whang2008).
 
     Estimator: the Jacobi estimator fuses at t + T_B the samples the ordered one fuses at t, so
     compare δx(t) = x_J(t + T_B) − x_O(t). Those samples carry the same errors; their truths
@@ -728,7 +726,7 @@ def test_a_jacobi_sensor_samples_the_plant_one_sensor_step_late(multi_rate):
     closed-loop test, 6.5e-4 m, rounded up), while the counters agree exactly."""
     system, runs = multi_rate
     ordered, jacobi = runs["ordered"], runs["jacobi"]
-    vz_max = 0.2 * 60.0  # seed 003's profile accelerates at 0.2 m/s² for the first 60 s
+    vz_max = 0.2 * 60.0  # yang2020's profile accelerates at 0.2 m/s² for the first 60 s
     for sensor, period in (("baro", 0.2), ("gps", 1.0)):
         diff = np.abs(jacobi[f"{sensor}.y"] - ordered[f"{sensor}.y"]).max()
         assert diff <= vz_max * (period - system.base_step) + 2e-3, sensor

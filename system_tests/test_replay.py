@@ -13,20 +13,22 @@ from altfusion.cli import main
 from altfusion.cosim import CosimError, read_ssp
 from altfusion.cosim.results import Results
 from altfusion.cosim.runner import Simulation
+from altfusion.estimators.registry import ESTIMATOR_CLASSES
+from altfusion.health_events import events_csv, health_events
 from altfusion.replay.compare import (
     compare_all,
     format_table,
     new_sample_rows,
     settle_time,
 )
-from altfusion.replay.component import OUTPUT_NAMES
 from altfusion.replay.run import declared_inputs
-from altfusion.replay.system import CATALOG_ESTIMATORS, LOGS, REPLAY
+from altfusion.signals import LOG_OUTPUTS
+from altfusion.systems.replay import LOGS, REPLAY
 
 ROOT = Path(__file__).resolve().parents[1]
 MODELS = ROOT / "models"
 LOG_DIR = ROOT / "tests" / "data" / "flightlogs"
-ESTIMATORS = tuple(CATALOG_ESTIMATORS)
+ESTIMATORS = tuple(ESTIMATOR_CLASSES)
 TOPICS = {"baro": "vehicle_air_data", "gps": "vehicle_gps_position", "acc": "sensor_combined",
           "laser": "distance_sensor", "ekf": "vehicle_local_position"}
 
@@ -69,7 +71,7 @@ def test_catalog_replay_systems_connect_exactly_the_inputs_each_fmu_declares(ssp
         for estimator in ESTIMATORS:
             connected = {c.end.split(".", 1)[1] for c in spec.connections
                          if c.end.startswith(f"{estimator}.")}
-            provided = set(declared_inputs(fmus[estimator])) & set(OUTPUT_NAMES)
+            provided = set(declared_inputs(fmus[estimator])) & set(LOG_OUTPUTS)
             assert connected == provided, (name, estimator)
 
 
@@ -168,6 +170,10 @@ def test_altfusion_replay_prints_the_comparison_and_writes_csv_and_plot(fmus, tm
     assert (tmp_path / f"{stem}.png").stat().st_size > 10_000
     header = (tmp_path / f"{stem}.csv").read_text().splitlines()[0]
     assert "BaselineKF.h_est [m]" in header and "replay.ekf_h [m]" in header
+    summary = (tmp_path / f"{stem}_summary.md").read_text()          # beside the plot
+    assert [line.split(" | ")[0] for line in summary.splitlines()[2:]] == [
+        "| PX4 EKF2 (reference)", "| BaselineKF", "| WhangGAEstimator"]
+    assert (tmp_path / f"{stem}_summary.csv").read_text().startswith("estimate,vs EKF2")
 
 
 def test_altfusion_replay_refuses_a_missing_log_or_an_unknown_estimator(fmus, tmp_path, capsys):
@@ -179,7 +185,8 @@ def test_altfusion_replay_refuses_a_missing_log_or_an_unknown_estimator(fmus, tm
 
 
 def test_a_log_file_that_is_not_there_fails_initialization_naming_log_file(fmus):
-    from altfusion.cosim import ComponentSpec, SystemSpec, simulate
+    from altfusion.cosim import simulate
+    from altfusion.systems.spec import ComponentSpec, SystemSpec
 
     system = SystemSpec("bad_log", "LogReplay of a missing file",
                         (ComponentSpec(REPLAY, "LogReplay", 0.01,
@@ -256,3 +263,19 @@ def test_the_table_flags_a_divergent_estimate_and_gives_the_valid_fraction():
     # samples arrive at rows 1..9 (t = 1..9 s): valid from row 1 while t - 9 s <= 5 s, 14 of 20
     assert good.valid_fraction == pytest.approx(14 / 20)
     assert "70%" in format_table(reports)
+
+
+def test_altfusion_replay_says_the_health_events_and_writes_them(fmus, tmp_path, capsys):
+    """The replay prints each estimator's health events in words and writes them all to
+    ``<system>.events.csv``, derived from the recorded outputs as for any host's results."""
+    log = LOG_DIR / LOGS["replay_px4_sitl"].file
+    assert main(["replay", str(log), "--models", str(MODELS), "--out", str(tmp_path),
+                 "--estimators", "BaselineKF,AltitudeEKF"]) == 0
+    out = capsys.readouterr().out
+    stem = "replay_pyulog_sample_px4_events"
+    events = tmp_path / f"{stem}.events.csv"
+    assert f"health events (all in {events}):" in out
+    results = Results.from_csv(tmp_path / f"{stem}.csv")
+    assert events.read_text() == events_csv(health_events(results))
+    said = out.split("health events")[1]
+    assert "  BaselineKF\n" in said and "  AltitudeEKF\n" in said and " initialized" in said

@@ -1,9 +1,9 @@
-"""Paper reproduction of seed 001 (``altfusion reproduce bao2017``), with a reduced Monte Carlo
+"""Paper reproduction of bao2017 (``altfusion reproduce bao2017``), with a reduced Monte Carlo
 (the first ``RUNS`` runs of master seed 0: the first runs of the full reproduction), and the
 reference CSV of its scenario.
 
 Each statistical assertion states its tolerance and where it comes from; the numbers of the
-full reproduction are in the README ("Paper reproduction: seed 001 (Bao et al.)").
+full reproduction are in the README ("Paper reproduction: bao2017 (Bao et al.)").
 """
 
 from pathlib import Path
@@ -138,7 +138,7 @@ def test_adaptive_r_beats_the_best_constant_r_in_every_run(bao, window):
 @either_way("bao")
 @pytest.mark.parametrize("R", bao2017.CONSTANT_R)
 def test_adaptive_r_beats_every_constant_r_over_the_test(bao, R):
-    """NOTES.md (seed 001): adaptive R beats every constant R on a static test whose GPS
+    """docs/papers.md (bao2017): adaptive R beats every constant R on a static test whose GPS
     quality varies: the 95 % t interval of the paired difference of mean square errors over
     the test lies below 0 for each R of the grid."""
     _, _, a = bao

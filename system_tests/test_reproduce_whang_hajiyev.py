@@ -1,9 +1,9 @@
-"""Paper reproductions of seeds 000 and 002 (``altfusion reproduce whang2008|hajiyev``), with a
+"""Paper reproductions of whang2008 and hajiyev (``altfusion reproduce whang2008|hajiyev``), with a
 reduced Monte Carlo (the first ``WHANG_RUNS`` and ``HAJIYEV_RUNS`` runs of master seed 0: the
 first runs of the full reproductions), and the reference CSVs of their scenarios.
 
 Each statistical assertion states its tolerance and where it comes from; the numbers of the
-full 50-run reproductions are in the README ("Paper reproductions: seeds 000 and 002").
+full 50-run reproductions are in the README ("Paper reproductions: whang2008 and hajiyev").
 """
 
 import subprocess
@@ -30,12 +30,12 @@ ROOT = Path(__file__).resolve().parents[1]
 MODELS = ROOT / "models"
 WHANG_RUNS = 10
 HAJIYEV_RUNS = 5
-"""Seed 002's six campaigns (three estimators, two cases, 1560 s each) cost about 15 s of CPU
+"""hajiyev's six campaigns (three estimators, two cases, 1560 s each) cost about 15 s of CPU
 per run: five runs keep every interval below within its margin (each is derived from the
 number of runs) at half the CI time of ten."""
 
 
-# ------------------------------------------------------------------------------ seed 000
+# ------------------------------------------------------------------------------ whang2008
 
 
 @pytest.fixture(scope="module", params=DEFAULT)
@@ -75,7 +75,7 @@ def test_whang_reproduction_resumes_without_rerunning_and_refuses_to_overwrite(w
 
 @either_way("whang")
 def test_whang_final_height_stays_under_the_gps_error_level(whang):
-    """Seed 000 Section 3: the estimator "can suppress the height estimation errors under the
+    """whang2008 Section 3: the estimator "can suppress the height estimation errors under the
     GPS error level" (70 m). The 95 % interval of the final height's RMS over the flight
     (each run one sample) lies below 70 m and below the GPS's own; so does the RMS of every
     10 s window (one lapse-rate period), which smooths the ±40 % scatter of single instants
@@ -134,7 +134,7 @@ def test_whang_campaign_run_0_is_the_reference(whang):
     assert reference_differences(reference.sampled(run), reference.stored(ROOT)) == []
 
 
-# ------------------------------------------------------------------------------ seed 002
+# ------------------------------------------------------------------------------ hajiyev
 
 
 @pytest.fixture(scope="module", params=DEFAULT)

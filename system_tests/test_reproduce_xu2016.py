@@ -1,4 +1,4 @@
-"""Paper reproduction of seed 004 (``altfusion reproduce xu2016``) with a reduced Monte Carlo
+"""Paper reproduction of xu2016 (``altfusion reproduce xu2016``) with a reduced Monte Carlo
 (the first ``RUNS`` runs of master seed 0: the first runs of the full reproduction), and the
 reference CSVs of its scenarios.
 
@@ -6,7 +6,7 @@ Each statistical assertion states its tolerance and where it comes from. The pap
 single flights, so Section 3.2's bounds are checked in every run as well as on the 95 %
 intervals over the runs (with 2 runs the RMS's t interval has 1 degree of freedom:
 t = 12.7, hence wide). The numbers of the full reproduction are in the README ("Paper
-reproduction: seed 004 (Xu et al.)").
+reproduction: xu2016 (Xu et al.)").
 """
 
 from pathlib import Path

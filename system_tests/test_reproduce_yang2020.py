@@ -1,9 +1,9 @@
-"""Paper reproduction of seed 003 (``altfusion reproduce yang2020``), with a reduced Monte Carlo
+"""Paper reproduction of yang2020 (``altfusion reproduce yang2020``), with a reduced Monte Carlo
 (the first ``RUNS`` runs of master seed 0: the first runs of the full reproduction), and the
 reference CSVs of its scenarios.
 
 Each statistical assertion states its tolerance and where it comes from; the numbers of the
-full reproduction are in the README ("Paper reproduction: seed 003 (Yang et al.)").
+full reproduction are in the README ("Paper reproduction: yang2020 (Yang et al.)").
 """
 
 from pathlib import Path
@@ -63,7 +63,7 @@ def test_yang_weighted_fusion_sigma_matches_its_theory(yang):
 @either_way("yang")
 def test_yang_kalman_filter_beats_every_sensor_and_the_fusion_in_every_run(yang):
     """Section 4.2's "499 / 491 / 388 times better than GPS / baro / radio altimeter", read as
-    counts of runs (NOTES.md): here the filter's σ of eq. (15) is below every sensor's and
+    counts of runs (docs/papers.md): here the filter's σ of eq. (15) is below every sensor's and
     below the weighted fusion's in every run (all 125 runs of the full reproduction). By a
     wide margin: the 95 % interval of the filter's RMS (each run one sample, t with 3
     degrees of freedom) lies below σ_Y / 4 = 2.14 m (125 runs: 0.86 [0.76, 0.95] m, a

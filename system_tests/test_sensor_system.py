@@ -35,7 +35,7 @@ def test_every_sensor_counts_its_samples_over_the_420_s_flight(yang):
     ("accelerometer.acc_z", "plant.az", SEED_003_SENSORS["accelerometer"]["noise_std"], 0.1),
 ])
 def test_each_sensor_error_has_seed_003s_sigma_in_flight(yang, measured, truth, sigma, period):
-    """Seed 003 Section 4.2's error levels, seen on the recorded samples taken at the
+    """yang2020 Section 4.2's error levels, seen on the recorded samples taken at the
     recording instants (so no sampling lag enters the error): the barometer's 20 m is a
     height noise, independent of the altitude."""
     every = round(period / 0.1)

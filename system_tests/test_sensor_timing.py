@@ -4,7 +4,8 @@
 import numpy as np
 import pytest
 
-from altfusion.cosim import ComponentSpec, CosimError, Simulation, SystemSpec
+from altfusion.cosim import CosimError, Simulation
+from altfusion.systems.spec import ComponentSpec, SystemSpec
 
 HOUR = 3600.0
 INTERVAL = 0.2

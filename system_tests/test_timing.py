@@ -23,10 +23,10 @@ from altfusion.cli import main
 from altfusion.cosim.results import Results
 from altfusion.cosim.runner import simulate
 from altfusion.cosim.ssp import read_ssp, write_ssp
-from altfusion.cosim.system import ComponentSpec, SystemSpec
 from altfusion.estimators.baseline import BaselineKF
 from altfusion.systems.plant import plant_components, plant_connections
 from altfusion.systems.sensors import sensor_components, sensor_connections
+from altfusion.systems.spec import ComponentSpec, SystemSpec
 from altfusion.systems.wiring import estimator_connections
 from altfusion.timing.command import with_timing_record
 from altfusion.timing.streams import Consumer, sensor_streams

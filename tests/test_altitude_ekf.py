@@ -17,7 +17,7 @@ import pytest
 
 from altfusion.errors import ParameterError
 from altfusion.estimators.altitude_ekf import AltitudeEKF
-from altfusion.estimators.base import SourceBit, source_bit
+from altfusion.estimators.health import UNKNOWN_STD, SourceBit, source_bit
 
 sys.path.insert(0, str(Path(__file__).parent))
 from stream_feeder import StreamFeeder  # noqa: E402
@@ -175,6 +175,22 @@ def test_silent_sensors_turn_h_valid_false_within_aiding_timeout():
     assert 10.0 + 5.0 - STEP <= first_invalid <= 10.0 + 5.0 + STEP
 
 
+def test_h_std_is_the_unknown_maximum_until_initialized():
+    """Before its first height sample AltitudeEKF knows nothing of the height: h_std is
+    UNKNOWN_STD (1e5 m) with h_valid false (issue 30: it reported 0 m, perfect certainty),
+    accelerometer samples or not; the first baro sample starts it with that sample's variance
+    plus its offset's prior (the GNSS is the height reference: the baro reads h + d)."""
+    flight = Flight()
+    ekf = flight.ekf
+    assert ekf.h_std == UNKNOWN_STD and not ekf.h_valid
+    flight.fly(1.0, baro=None, gps=None)
+    assert ekf.h_std == UNKNOWN_STD and not ekf.h_valid and not ekf.started
+    flight.fly(STEP, gps=None)
+    assert ekf.started and ekf.h_valid
+    assert ekf.h_std == pytest.approx(math.hypot(NOISE["baro_noise"], ekf.params.P0_offset**0.5),
+                                      rel=1e-9)
+
+
 def test_accelerometer_bias_learnt_to_0_03_in_60_s():
     """PX4 test_EKF_accelerometer: a 0.2 m/s² bias is learnt to ±0.03 m/s² within 60 s."""
     flight = Flight()
@@ -262,7 +278,7 @@ def test_rangefinder_switches_with_hysteresis_and_resets_on_a_terrain_step():
 
 
 def test_gnss_noise_scales_with_vdop_and_satellites():
-    """σ_G = gps_noise·(VDOP/gps_vdop_ref)·√max(1, N_ref/N) (seed 001)."""
+    """σ_G = gps_noise·(VDOP/gps_vdop_ref)·√max(1, N_ref/N) (bao2017)."""
     ekf = AltitudeEKF(AltitudeEKF.Params(gps_noise=2.0, gps_nsat_ref=6))
     assert ekf._gps_sigma({"gps_vdop": 1.5, "gps_nsat": 9}) == pytest.approx(3.0)
     assert ekf._gps_sigma({"gps_vdop": 4.0, "gps_nsat": 5}) == pytest.approx(
@@ -274,7 +290,7 @@ def test_gnss_noise_scales_with_vdop_and_satellites():
 
 def test_without_an_accelerometer_the_motion_model_estimates_the_acceleration():
     """No accelerometer: b_a carries minus the vehicle's acceleration (white jerk of
-    ``jerk_psd``), so a steady deceleration (a descent levelling off, seed 002) is tracked
+    ``jerk_psd``), so a steady deceleration (a descent levelling off, hajiyev) is tracked
     without lag. 0.05 m/s² for 200 s, baro σ 0.5 m every step and GNSS speed σ 0.1 m/s at
     10 Hz: the acceleration estimate lies within 3 of its own σ of the truth (0.27 % of
     Gaussian errors beyond), that σ below its prior's (it is observed), the mean speed error
@@ -406,7 +422,7 @@ def test_ground_effect_dead_zone_ignores_negative_baro_innovations_near_the_grou
 
 
 def test_noise_adaptation_is_bounded_and_weights_a_noisy_source_down():
-    """Seed 004's adaptation (adaptive_noise), gates off as in seed 004: a baro 10x
+    """xu2016's adaptation (adaptive_noise), gates off as in xu2016: a baro 10x
     noisier than its nominal 0.5 m, the only height source, is weighted down (the height
     error is smaller than without adaptation) and the factor on R never exceeds
     adaptive_max."""

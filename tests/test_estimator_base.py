@@ -5,7 +5,8 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from altfusion.estimators.base import BARO, RADAR, Estimator, HealthParams, status_bits
+from altfusion.estimators.base import Estimator, HealthParams, Status, status_bits
+from altfusion.estimators.streams import BARO, RADAR
 from altfusion.fmi import estimator_variables
 from altfusion.fmi.state import StateHeader, dump, load
 from altfusion.params import param
@@ -89,7 +90,8 @@ def test_every_status_bit_is_documented_with_its_mask():
 
 def test_a_sample_stamped_ahead_of_the_clock_is_held_until_due_and_an_absurd_one_refused():
     """ECOS shows a 10 Hz sample of t = 0.3 s at t = 0.1 s: it is fused at 0.3 s, not before;
-    a stamp more than max_sample_lead (1 s) ahead is refused and counted."""
+    a stamp more than max_sample_lead (1 s) ahead is refused, counted in radar_rejected and
+    flagged SAMPLE_REFUSED for its step."""
     echo = Echo(step_size=0.1)
     echo.radar_h, echo.radar_time, echo.radar_count = 12.0, 0.3, 1
     for n in range(3):
@@ -97,9 +99,36 @@ def test_a_sample_stamped_ahead_of_the_clock_is_held_until_due_and_an_absurd_one
         echo.do_step(n * 0.1, 0.1)
     assert echo.fused == [("radar", {"radar_h": 12.0, "radar_time": 0.3})]
     echo.radar_time, echo.radar_count = 1.5, 2
-    for n in range(3, 20):
+    echo.do_step(0.3, 0.1)
+    assert echo.status & Status.SAMPLE_REFUSED
+    for n in range(4, 20):
         echo.do_step(n * 0.1, 0.1)
-    assert len(echo.fused) == 1 and echo.n_ignored == 1
+    assert len(echo.fused) == 1 and echo.radar_rejected == echo.n_rejected == 1
+    assert not echo.status & Status.SAMPLE_REFUSED
+
+
+def test_a_stale_or_out_of_order_sample_is_refused_and_counted():
+    """A radar sample stamped 10 s behind the clock (more than max_sample_delay, 3 s) is not
+    fused as if current (issue 30: a GNSS sample 10 s old was fused, counted nowhere); one
+    stamped before the stream's last sample neither; both count in radar_rejected. Samples
+    slightly behind (early_late_samples: 0.02 s) pass."""
+    echo = Echo(step_size=0.1)
+    for n in range(119):
+        echo.do_step(n * 0.1, 0.1)
+    echo.radar_h, echo.radar_time, echo.radar_count = 12.0, 11.98, 1   # 0.02 s behind
+    echo.do_step(echo.time, 0.1)
+    assert echo.fused == [("radar", {"radar_h": 12.0, "radar_time": 11.98})]
+    echo.radar_time, echo.radar_count = 12.1 - 10.0, 2                 # 10 s old
+    echo.do_step(echo.time, 0.1)
+    assert echo.status & Status.SAMPLE_REFUSED and echo.radar_rejected == 1
+    echo.radar_time, echo.radar_count = 11.9, 3                        # before the last
+    echo.do_step(echo.time, 0.1)
+    assert echo.status & Status.SAMPLE_REFUSED and echo.radar_rejected == 2
+    echo.radar_time, echo.radar_count = 12.3, 4
+    echo.do_step(echo.time, 0.1)
+    assert len(echo.fused) == 2 and echo.radar_rejected == echo.n_rejected == 2
+    assert not echo.status & Status.SAMPLE_REFUSED
+    assert echo.n_ignored == 0
 
 
 def test_a_held_sample_survives_a_saved_and_restored_state():

@@ -7,9 +7,9 @@ import pytest
 from stream_feeder import StreamFeeder
 
 from altfusion.errors import ParameterError
-from altfusion.estimators.base import SourceBit, source_bit
 from altfusion.estimators.baseline import BaselineKF, BaselineKFParams
 from altfusion.estimators.hajiyev import HajiyevAdaptiveEstimator, HajiyevParams
+from altfusion.estimators.health import SourceBit, Status, source_bit
 from altfusion.estimators.whang import WhangGAEstimator, WhangParams
 from altfusion.physics.atmosphere import Atmosphere, AtmosphereParams
 from altfusion.physics.barometric import height_from_pressure, pressure_at
@@ -83,6 +83,25 @@ def test_gps_without_fix_is_not_fused(cls):
     assert feeder.estimator.h_est == pytest.approx(100.0, abs=1.0)
 
 
+@pytest.mark.parametrize("cls", ESTIMATORS)
+def test_a_gnss_sample_stamped_10_s_in_the_past_is_refused_and_counted(cls):
+    """Issue 30: a GNSS sample stamped 10 s before the estimator's clock was fused as if
+    current and counted nowhere. It is refused (more than max_sample_delay, 3 s, old):
+    counted in gps_rejected, flagged SAMPLE_REFUSED, and the estimate is exactly that of a
+    twin that never received it."""
+    feeder, twin = StreamFeeder(cls(step_size=0.2)), StreamFeeder(cls(step_size=0.2))
+    for k in range(100):
+        for f in (feeder, twin):
+            f.step(**baro_gps(baro=100.0, gps=100.0 if k % 5 == 4 else None))
+    stale = baro_gps(baro=100.0)
+    stale["gps"] = {"gps_h": 103.0, "gps_time": feeder.estimator.time + 0.2 - 10.0}
+    feeder.step(**stale)
+    twin.step(**baro_gps(baro=100.0))
+    e = feeder.estimator
+    assert e.gps_rejected == e.n_rejected == 1 and e.status & Status.SAMPLE_REFUSED
+    assert (e.h_est, e.h_std) == (twin.estimator.h_est, twin.estimator.h_std)
+
+
 @pytest.mark.parametrize(("cls", "params", "name"), [
     (BaselineKF, BaselineKFParams(R_gps=-1.0), "R_gps"),
     (HajiyevAdaptiveEstimator, HajiyevParams(R_baro=0.0), "R_baro"),
@@ -94,8 +113,8 @@ def test_invalid_parameters_are_rejected_by_name(cls, params, name):
 
 
 def hajiyev_run(adaptive: bool, drift: bool, seed: int) -> np.ndarray:
-    """Seed 002 Section 5 with the paper's own measurement simulation (eqs. 32-33): the baro
-    altitude from eq. (1) with p0(k-1), T0(k-1) drifting from k = 23 (NOTES.md)."""
+    """hajiyev Section 5 with the paper's own measurement simulation (eqs. 32-33): the baro
+    altitude from eq. (1) with p0(k-1), T0(k-1) drifting from k = 23 (docs/papers.md)."""
     rng = np.random.default_rng(seed)
     profile = make_profile("hajiyev")
     estimator = HajiyevAdaptiveEstimator(HajiyevParams(adaptive=adaptive), step_size=1.0)
@@ -180,7 +199,7 @@ def test_gps_before_the_first_baro_sample_is_not_fused(cls):
 
 
 def whang_runs(paper_sign: bool, runs: int = 6):
-    """Seed 000 Section 3 on synthetic air data: our atmosphere with a random lapse-rate change
+    """whang2008 Section 3 on synthetic air data: our atmosphere with a random lapse-rate change
     every 10 s (σ 0.003 K/m), baro from eq. (1) + 5 m noise, ADM temperature + 1.5 K, GPS 70 m."""
     errors = {"baro": [], "comp": [], "final": [], "gps": []}
     for run in range(runs):
@@ -207,7 +226,7 @@ def whang_runs(paper_sign: bool, runs: int = 6):
 
 
 def test_whang_final_height_beats_gps_and_compensated_height():
-    """Seed 000's claim: the final height's error is below the GPS's. The 50-run reproduction
+    """whang2008's claim: the final height's error is below the GPS's. The 50-run reproduction
     gives 41.6 / 69.8 m = 0.60 with an interval of ±1.3 %; 6 runs scatter √(50/6) = 2.9 times
     more (±3.8 %), so 0.7 leaves a margin of over 4 of those intervals."""
     rms = whang_runs(paper_sign=False)

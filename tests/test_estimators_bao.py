@@ -1,4 +1,4 @@
-"""BaoDriftEstimator (seed 001) on synthetic data: principle error, wind, adaptive drift KF."""
+"""BaoDriftEstimator (bao2017) on synthetic data: principle error, wind, adaptive drift KF."""
 
 import math
 
@@ -51,7 +51,7 @@ def test_principle_error_correction_removes_a_weather_change_to_first_order(h):
 
 @pytest.mark.parametrize(("speed", "expected"), [(1.5, 0.117), (2.5, 0.325), (3.5, 0.637)])
 def test_wind_error_is_eq_11_at_isa_sea_level(speed, expected):
-    """NOTES.md: at ISA sea level eq. (11) with ρ = 1.25 kg/m³ gives 0.117 / 0.325 / 0.637 m
+    """docs/papers.md: at ISA sea level eq. (11) with ρ = 1.25 kg/m³ gives 0.117 / 0.325 / 0.637 m
     (a correction: negative, the wind makes the barometer read high)."""
     dynamic = 0.5 * 1.25 * speed**2
     correction = wind_error(ISA[0] - dynamic, speed, 1.25, 0.0, *ISA)

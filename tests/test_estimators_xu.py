@@ -1,4 +1,4 @@
-"""XuSHAEKF (seed 004) on synthetic data: the hover simulations of Section 3.1, the error bounds
+"""XuSHAEKF (xu2016) on synthetic data: the hover simulations of Section 3.1, the error bounds
 of Section 3.2, source switching, the adaptive parts and the choice of γ."""
 
 from dataclasses import dataclass
@@ -8,14 +8,14 @@ import pytest
 from stream_feeder import StreamFeeder
 
 from altfusion.errors import ParameterError
-from altfusion.estimators.base import SourceBit, source_bit
+from altfusion.estimators.health import SourceBit, source_bit
 from altfusion.estimators.xu import BARO_SOURCE, LASER_SOURCE, XuParams, XuSHAEKF
 from altfusion.physics.profiles import make_profile, trapezoid_moves
 
 
 @dataclass(frozen=True)
 class Scene:
-    """Realistic sensors (NOTES.md; the paper gives none), all clocks aligned: laser 100 Hz,
+    """Realistic sensors (docs/papers.md; the paper gives none), all clocks aligned: laser 100 Hz,
     σ 5 mm, valid 0.1-25 m above the terrain (reads 0 otherwise); MEMS baro 50 Hz, σ 0.5 m,
     1.5 m constant error; GPS 5 Hz, σ 3 m; accelerometer 100 Hz, σ 0.05 m/s², bias 0.03 m/s².
     A GPS failure makes the GPS read 20 m high with σ 10 m from ``gps_failure_at`` on; the
@@ -117,7 +117,7 @@ def test_multipoint_hover_keeps_the_error_bounds_of_section_3_2():
 def test_gamma_16_rarely_fires_strong_tracking_gamma_4_fires_often_and_hurts():
     """While the filter converges v²/C is χ²₁: P(χ²₁ > 16) = 6·10⁻⁵, so about 0.3 false alarms
     are expected over 90 s of 50 Hz baro samples (≤ 2 asserted, P > 0.99); P(χ²₁ > 4) = 4.6 %,
-    about 200 (> 100 asserted), and each inflates P toward the baro noise (NOTES.md)."""
+    about 200 (> 100 asserted), and each inflates P toward the baro noise (docs/papers.md)."""
     scene = Scene("xu_hover35", 90.0)
     errors16, _, estimator16 = fly(scene, XuParams(gamma=16.0), seed=3)
     errors4, _, estimator4 = fly(scene, XuParams(gamma=4.0), seed=3)
@@ -210,7 +210,7 @@ def test_strong_tracking_inflates_the_motion_states_not_the_baro_error():
     """Eq. (24) as applied (see ``XuSHAEKF._strong_tracking``): P⁻ ← D P⁻ D with D = √λ on h,
     vz and the accelerometer bias and 1 on the baro's slow error ε_b, so Var ε_b is unchanged
     and the motion block scales by exactly λ. Inflating ε_b on a false alarm in a steady hover
-    gave 6-7 m single errors above 25 m in the seed 004 reproduction."""
+    gave 6-7 m single errors above 25 m in the xu2016 reproduction."""
     _, _, estimator = fly(Scene("xu_hover35", 20.0), seed=3)
     before = estimator.P.copy()
     hph, R, factor = 1e-4, 0.25, 400.0

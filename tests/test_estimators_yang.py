@@ -1,4 +1,4 @@
-"""YangFusionKF (seed 003) on synthetic data: time unification, weighted fusion, 3-state KF."""
+"""YangFusionKF (yang2020) on synthetic data: time unification, weighted fusion, 3-state KF."""
 
 import math
 
@@ -20,7 +20,7 @@ PAPER_FUSED_STD = (1.0 / 30**2 + 1.0 / 20**2 + 1.0 / 10**2) ** -0.5
 
 
 def test_time_unification_is_the_corrected_eq_5():
-    """NOTES.md: Q_tb = Q_ta + (t_b - t_a)(Q_ta - Q_tc)/(t_a - t_c) (the printed eq. 5
+    """docs/papers.md: Q_tb = Q_ta + (t_b - t_a)(Q_ta - Q_tc)/(t_a - t_c) (the printed eq. 5
     multiplies by t_b instead of t_b - t_a)."""
     history = [(10.0, 100.0), (10.1, 101.2)]
     assert unify_time(history, 10.15) == pytest.approx(101.8)
@@ -38,7 +38,7 @@ def test_weighted_fusion_weights_by_inverse_variance_and_reaches_the_bound():
 
 
 def paper_run(seed: int = 1):
-    """Section 4 with clocks aligned (NOTES.md): profile yang2020, GPS 30 m / 0.2 m/s every
+    """Section 4 with clocks aligned (docs/papers.md): profile yang2020, GPS 30 m / 0.2 m/s every
     100 ms, baro 20 m every 10 ms, radio altimeter 10 m every 200 ms, IMU 0.01 m/s² every
     10 ms; the estimator stepped every 10 ms. Errors by source: each sensor's samples, the
     weighted fusion at each fusion, the KF at each step; and the KF's own variances."""

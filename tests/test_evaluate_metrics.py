@@ -8,13 +8,13 @@ import pytest
 
 from altfusion.estimators.altitude_ekf import AltitudeEKF
 from altfusion.estimators.bao import BaoDriftEstimator
-from altfusion.estimators.base import SourceBit, Status, source_bit
 from altfusion.estimators.baseline import BaselineKF
 from altfusion.estimators.hajiyev import HajiyevAdaptiveEstimator
+from altfusion.estimators.health import SourceBit, Status, source_bit
 from altfusion.estimators.whang import WhangGAEstimator
 from altfusion.estimators.xu import XuSHAEKF
 from altfusion.estimators.yang import YangFusionKF
-from altfusion.montecarlo.evaluate_metrics import (
+from altfusion.evaluation.metrics import (
     RECOVERY_WINDOW,
     Fault,
     Series,
@@ -28,7 +28,7 @@ from altfusion.montecarlo.evaluate_metrics import (
     trailing_rms,
     valid_fraction,
 )
-from altfusion.montecarlo.evaluate_scenarios import (
+from altfusion.evaluation.scenarios import (
     NOISE_NAMES,
     PAPER_SCENARIOS,
     EstimatorInfo,
@@ -139,9 +139,9 @@ def test_summaries_count_the_runs_with_a_finite_value():
     summary = summarize([2.0, 4.0, math.inf])
     assert (summary.mean, summary.finite, summary.runs) == (3.0, 2, 3)
     assert summary.std == pytest.approx(math.sqrt(2.0))
-    assert summary.format(unit="s") == "3 ± 1.41 s (2/3)"
+    assert summary.format(unit="s") == "3 ± 1.41 s (n=2 of 3)"
     assert summarize([math.inf]).format() == "never"
-    assert summarize([0.9, 0.95]).format(percent=True) == "92.5 ± 3.5 %"
+    assert summarize([0.9, 0.95]).format(percent=True) == "92.5 ± 3.5 % (n=2)"
 
 
 def test_an_estimator_driven_by_the_accelerometer_is_na_without_one():

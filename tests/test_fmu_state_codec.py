@@ -1,11 +1,12 @@
 """The FMU state codec (altfusion.fmi.state) on core values the system tests do not reach."""
 
 import json
+import re
 
 import pytest
 
-from altfusion.estimators.base import Status
-from altfusion.fmi.state import StateError, StateHeader, assemble, dump, load
+from altfusion.estimators.health import Status
+from altfusion.fmi.state import StateError, StateHeader, assemble, check_like, dump, load
 
 HEADER = StateHeader("Model", "guid", "0.1.0+x")
 
@@ -22,3 +23,39 @@ def test_an_enum_tree_with_a_non_scalar_value_is_refused():
     data = assemble(HEADER, json.dumps(body).encode())
     with pytest.raises(StateError, match="enum"):
         load(data, HEADER)
+
+
+def baseline_state() -> dict:
+    """A BaselineKF core in the adapter's state dict, as ``fmi2GetFMUstate`` copies it."""
+    from altfusion.estimators.baseline import BaselineKF
+
+    core = BaselineKF()
+    return {"core": core, "params": {}, "step_size": 0.01, "start_time": 0.0, "failure": None}
+
+
+@pytest.mark.parametrize("edit, named", [
+    (lambda s: setattr(s["core"], "h_est", "x"), "state['core'].h_est is a str"),
+    (lambda s: setattr(s["core"], "P", s["core"].P[:1]), "state['core'].P is an array"),
+    (lambda s: setattr(s["core"], "x", s["core"].x.astype(complex)),
+     "state['core'].x is an array of complex128"),
+    (lambda s: setattr(s["core"], "started", 1.0), "state['core'].started is a float"),
+    (lambda s: delattr(s["core"], "bias"), "lacks ['bias']"),
+    (lambda s: s.update(step_size="0.01"), "state['step_size'] is a str"),
+])
+def test_a_decoded_state_of_another_shape_is_refused_field_by_field(edit, named):
+    """Bytes with a correct checksum can still hold a wrongly typed field: check_like names
+    it against the current state (which the restore would replace)."""
+    current = baseline_state()
+    stored = load(dump(HEADER, current), HEADER)
+    check_like(stored, current)                          # a state of its own kind passes
+    edit(stored)
+    with pytest.raises(StateError, match=re.escape(named)):
+        check_like(stored, current)
+
+
+def test_unset_optional_fields_and_number_types_match():
+    current = baseline_state()
+    stored = load(dump(HEADER, current), HEADER)
+    stored["failure"] = "a message"                      # None in the current state
+    stored["core"].n_rejected = 3.0                      # a number for a number
+    check_like(stored, current)

@@ -7,6 +7,7 @@ from altfusion.atomic import atomic_write
 from altfusion.cosim.results import Results
 from altfusion.montecarlo.storage import (
     RunRecord,
+    damaged_runs,
     failed_runs,
     finished_runs,
     read_run,
@@ -63,3 +64,36 @@ def test_an_interrupted_write_leaves_neither_the_file_nor_a_temporary(tmp_path):
     with pytest.raises(KeyboardInterrupt):
         atomic_write(target, interrupted)
     assert list((tmp_path / "runs").iterdir()) == []
+
+
+def rewrite(path, **changes) -> None:
+    """Rewrite the run file ``path`` as a valid .npz with some arrays replaced."""
+    with np.load(path, allow_pickle=False) as data:
+        arrays = {name: data[name] for name in data.files}
+    arrays.update(changes)
+    with open(path, "wb") as handle:
+        np.savez(handle, **arrays)
+
+
+@pytest.mark.parametrize("changes, reason", [
+    (lambda values, time: {"values": values.astype(str)}, "values of dtype <U"),
+    (lambda values, time: {"values": values.astype(np.int64)}, "values of dtype int64"),
+    (lambda values, time: {"time": time.astype(str)}, "values of dtype <U"),
+    (lambda values, time: {"values": values[:, 0]}, "IndexError"),
+    (lambda values, time: {"values": values[:3]}, "inconsistent content"),
+    (lambda values, time: {"time": time.reshape(5, 1)}, "time of shape (5, 1)"),
+])
+def test_resume_finds_a_valid_npz_of_the_wrong_dtype_or_shape_damaged(tmp_path, changes,
+                                                                       reason):
+    """``mc --resume`` re-runs what :func:`damaged_runs` reports: a run file that is a valid
+    .npz but holds strings, integers or arrays of the wrong shape is damaged (the report
+    would fail on it), named with what is wrong."""
+    write_run(tmp_path, record(0))
+    write_run(tmp_path, record(1))
+    path = run_path(tmp_path, 1)
+    with np.load(path, allow_pickle=False) as data:
+        values, time = data["values"], data["time"]
+    rewrite(path, **changes(values, time))
+    damaged = damaged_runs(tmp_path)
+    assert list(damaged) == [1]
+    assert damaged[1].startswith("run_00001.npz: ") and reason in damaged[1]

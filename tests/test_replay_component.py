@@ -8,11 +8,12 @@ import pytest
 
 from altfusion.errors import ParameterError
 from altfusion.replay import component
+from altfusion.replay.calibration import launch_calibration
 from altfusion.replay.component import LogReplay, LogReplayParams, resolve_log_file
 from altfusion.replay.extract import FlightLog
 from altfusion.replay.streams import SampleStream
-from altfusion.replay.system import LOGS, launch_calibration
 from altfusion.replay.ulog import read_ulog
+from altfusion.systems.replay import LOGS
 
 LOGS_DIR = Path(__file__).parent / "data" / "flightlogs"
 

@@ -1,4 +1,4 @@
-"""Accelerometer: specific force with bias and noise, gravity removed (seed 003 eq. 4)."""
+"""Accelerometer: specific force with bias and noise, gravity removed (yang2020 eq. 4)."""
 
 import math
 

@@ -1,5 +1,5 @@
-"""AirDataModule: error statistics, the wind disturbance of seed 001 eq. (11) and Table 3,
-the drift of seed 001 eq. (6)/Fig. 1, and the principle error of seed 000 eqs. (2)-(4)
+"""AirDataModule: error statistics, the wind disturbance of bao2017 eq. (11) and Table 3,
+the drift of bao2017 eq. (6)/Fig. 1, and the principle error of whang2008 eqs. (2)-(4)
 emerging from a drifting atmosphere."""
 
 import math
@@ -9,6 +9,7 @@ import pytest
 from sensor_runs import Z999, mean_tolerance, run, std_tolerance
 
 from altfusion.constants import G0, ISA_LAPSE_RATE, ISA_P0, ISA_T0, R_AIR
+from altfusion.errors import ParameterError
 from altfusion.physics.atmosphere import Atmosphere, AtmosphereParams
 from altfusion.physics.barometric import height_from_pressure, pressure_at, temperature_at
 from altfusion.sensors import AirDataModule, AirDataParams
@@ -83,7 +84,7 @@ def test_pressure_bias_offsets_the_reported_pressure_exactly():
 
 
 def test_pressure_is_quantized_to_the_resolution_with_a_uniform_error():
-    """MS5611 (seed 001 Table 1): 0.012 hPa. The quantization error of a slowly varying
+    """MS5611 (bao2017 Table 1): 0.012 hPa. The quantization error of a slowly varying
     pressure is uniform on ±q/2: variance q²/12; its sample variance over N samples has
     standard deviation q²·√((1/80 - 1/144)/N) (fourth moment of the uniform: q⁴/80)."""
     q, n = 1.2, 20000
@@ -97,7 +98,7 @@ def test_pressure_is_quantized_to_the_resolution_with_a_uniform_error():
 
 
 def test_drift_increments_have_the_stated_mean_rate_and_spectral_density():
-    """Seed 001 eq. (6) with w of mean μ and spectral density σ²: increments over Δt are
+    """bao2017 eq. (6) with w of mean μ and spectral density σ²: increments over Δt are
     independent N(μΔt, σ²Δt)."""
     rate, variance_rate, dt, n = 0.01, 0.04, 0.2, 20000
     series = run(air_data(**{**QUIET, "drift_rate": rate, "drift_variance_rate": variance_rate},
@@ -111,7 +112,7 @@ def test_drift_increments_have_the_stated_mean_rate_and_spectral_density():
 
 
 def test_default_drift_is_about_ten_metres_per_hour():
-    """Seed 001 Fig. 1: about +10 m in an hour. Over 400 seeds the drift after 3600 s has mean
+    """bao2017 Fig. 1: about +10 m in an hour. Over 400 seeds the drift after 3600 s has mean
     drift_rate·3600 = 10 m and standard deviation √(σ²·3600) = 3 m."""
     runs = 400
     final = []
@@ -140,7 +141,7 @@ def test_enabling_one_error_source_does_not_change_another_ones_realization():
 
 # --------------------------------------------------------------------- wind disturbance
 def eq11(p_s: float, v: float, rho: float, T0: float, P0: float, beta: float) -> float:
-    """Seed 001 eq. (11), written out independently of the core:
+    """bao2017 eq. (11), written out independently of the core:
     ε_e = (T0/β)[(P_S/P0)^(-βR/g) - ((P_S - ½ρv²)/P0)^(-βR/g)]."""
     x = -beta * R_AIR / G0
     return T0 / beta * ((p_s / P0) ** x - ((p_s - 0.5 * rho * v * v) / P0) ** x)
@@ -177,7 +178,7 @@ def test_wind_error_is_exactly_seed_001_eq_11(h, v, rho):
 
 @pytest.mark.parametrize(("v", "table_3"), [(1.5, 0.1283), (2.5, 0.3510), (3.5, 0.6857)])
 def test_wind_error_matches_seed_001_table_3_at_a_site_air_density_of_1_12(v, table_3):
-    """NOTES.md: Table 3's theoretical values are eq. (11) with the paper's ρ = 1.25 kg/m³ in
+    """docs/papers.md: Table 3's theoretical values are eq. (11) with the paper's ρ = 1.25 kg/m³ in
     eq. (7) at a site whose own air density is about 1.12 kg/m³ (a warm day: 30 °C). The
     barometer is calibrated at the site. The error scales as 1/ρ_site, and that density is
     inferred ("about 1.12"): 5 % covers 1.07-1.18 kg/m³, a site ±15 K around 30 °C."""
@@ -230,9 +231,9 @@ def principle_error(p0_rate: float, T0_rate: float, duration: float) -> tuple[fl
     (0.0, 0.01), (0.0, -0.01), (-1.0, 0.0), (1.0, 0.0), (-1.0, -0.01), (0.5, 0.008),
 ])
 def test_scale_factor_and_bias_emerge_as_seed_000_eqs_3_4_to_first_order(p0_rate, T0_rate):
-    """Seed 000 eqs. (3)-(4): a = ΔT/T0, b = (RT0/g)ΔP/P0; seed 001 eq. (5) adds the
-    first-order term (RΓ/g)ΔP/P0 to a, which seed 000 neglects. Both papers' a and b are the
-    correction (true minus baro height, cf. seed 001 eq. 4 and NOTES.md on eq. 3): the error
+    """whang2008 eqs. (3)-(4): a = ΔT/T0, b = (RT0/g)ΔP/P0; bao2017 eq. (5) adds the
+    first-order term (RΓ/g)ΔP/P0 to a, which whang2008 neglects. Both papers' a and b are the
+    correction (true minus baro height, cf. bao2017 eq. 4 and docs/papers.md on eq. 3): the error
     baro_h - h = a·h + b has the opposite signs, a ≈ -ΔT/T0 - (RΓ/g)ΔP/P0 and
     b ≈ -(RT0/g)ΔP/P0 (a warmer or higher-pressure atmosphere makes the barometer read low).
 
@@ -242,7 +243,7 @@ def test_scale_factor_and_bias_emerge_as_seed_000_eqs_3_4_to_first_order(p0_rate
     a, b, r, s = principle_error(p0_rate, T0_rate, duration=1000.0)
     epsilon = abs(r) + abs(s)
     scale_eq3, bias_eq4 = s, R_AIR * ISA_T0 / G0 * r
-    pressure_term = R_AIR * ISA_LAPSE_RATE / G0 * r  # seed 001 eq. (5)
+    pressure_term = R_AIR * ISA_LAPSE_RATE / G0 * r  # bao2017 eq. (5)
     assert a == pytest.approx(-(scale_eq3 + pressure_term), abs=2 * epsilon**2)
     assert b == pytest.approx(-bias_eq4, abs=R_AIR * ISA_T0 / G0 * r * r + 1e-9)
     if p0_rate == 0.0:
@@ -251,7 +252,7 @@ def test_scale_factor_and_bias_emerge_as_seed_000_eqs_3_4_to_first_order(p0_rate
 
 
 def test_the_principle_error_grows_with_the_weather_drift():
-    """Seed 002 Section 5's drift (-10 Pa/s, -0.01 K/s): the bias follows -(RT0/g)·ΔP(t)/P0
+    """hajiyev Section 5's drift (-10 Pa/s, -0.01 K/s): the bias follows -(RT0/g)·ΔP(t)/P0
     as the pressure falls (first order, as above), growing linearly in time."""
     biases = []
     for duration in (10.0, 20.0, 40.0, 80.0):
@@ -259,3 +260,20 @@ def test_the_principle_error_grows_with_the_weather_drift():
         assert b == pytest.approx(-R_AIR * ISA_T0 / G0 * r, abs=R_AIR * ISA_T0 / G0 * r * r)
         biases.append(b)
     assert 0 < biases[0] < biases[1] < biases[2] < biases[3]
+
+
+def test_noise_beyond_the_calibration_atmosphere_is_refused_by_name():
+    """The calibration's formula has no pressure where its temperature T0 + lapse·(h - H0)
+    reaches 0 K: 29 m above H0 with T0 = 1 K and the steepest lapse rate, -0.0342 K/m, which
+    a noise of 1000 m leaves within a few samples. The sample fails with a
+    ValueError naming the cause instead of a complex pressure (TypeError at t = 0)."""
+    sensor = air_data(**{**QUIET, "height_noise_std": 1000.0, "T0": 1.0,
+                         "lapse_rate": -0.0342}, seed=1)
+    with pytest.raises(ValueError, match=r"beyond the calibration's atmosphere, whose "
+                                         r"temperature reaches 0 K: lower height_noise_std"):
+        run(sensor, 10, OUTPUTS, lambda t: {"p_static": 1.0e5, "T_air": 288.0})
+
+
+def test_noise_std_beyond_its_bound_is_refused_at_initialization():
+    with pytest.raises(ParameterError, match=r"'height_noise_std' = 1000000.0: must be <= 1000"):
+        air_data(height_noise_std=1e6)

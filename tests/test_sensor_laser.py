@@ -1,4 +1,4 @@
-"""LaserRangefinder: ±5 mm at 100 Hz from 0.1 m to 25 m, reading 0 outside (seed 004)."""
+"""LaserRangefinder: ±5 mm at 100 Hz from 0.1 m to 25 m, reading 0 outside (xu2016)."""
 
 import numpy as np
 import pytest

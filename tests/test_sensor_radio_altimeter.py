@@ -1,4 +1,4 @@
-"""RadioAltimeter: height above the terrain with noise, invalid beyond its range (seed 003)."""
+"""RadioAltimeter: height above the terrain with noise, invalid beyond its range (yang2020)."""
 
 import numpy as np
 from sensor_runs import mean_tolerance, run, std_tolerance

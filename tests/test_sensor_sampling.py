@@ -177,3 +177,27 @@ def test_params_of_every_sensor_extend_the_shared_sampling_params():
         fields = list(vars(cls.Params()))
         assert fields[:4] == ["seed", "sample_period", "sample_offset", "latency"], cls
         assert replace(cls.Params(), seed=3).seed == 3
+
+
+@pytest.mark.parametrize("host_step", [0.001, 0.03, 0.25, 1.0])
+def test_any_host_step_gives_the_same_samples_and_the_count_rises_by_the_number_taken(
+        host_step):
+    """A GNSS on a 0.01 s tick sampling every 0.1 s at a constant height: whatever the host's
+    step, after a step ending at t the count is the number of instants k·0.1 <= t, the stamp
+    the last of them and the held value the fixed-step sensor's for that sample, draw for draw
+    (a step of 0.25 s takes two or three samples at once)."""
+    reference = make(GnssReceiver, sample_period=0.1)
+    reference.h = 100.0
+    samples = {}
+    for n in range(300):
+        reference.do_step(n * 0.01, 0.01)
+        samples[reference.gps_count] = (reference.gps_time, reference.gps_h)
+    sensor = make(GnssReceiver, sample_period=0.1)
+    sensor.h = 100.0
+    time = 0.0
+    while time < 3.0 - 1e-9:
+        sensor.do_step(time, host_step)
+        time += host_step
+        assert sensor.gps_count == math.floor(time / 0.1 + 1e-9)
+        assert (sensor.gps_time, sensor.gps_h) == samples[sensor.gps_count]
+    assert sensor.gps_count == 30

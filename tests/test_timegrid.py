@@ -43,13 +43,54 @@ def test_start_time_offsets_the_grid():
     assert clock.time(5) == 11.0
 
 
-def test_advance_rejects_a_wrong_step_or_time():
+def run(clock: TickClock, current_time: float, step_size: float) -> int:
+    """Run one doStep request on ``clock``: the ticks it runs."""
+    due = clock.due(current_time, step_size)
+    for _ in range(due):
+        clock.tick()
+    return due
+
+
+def test_a_step_of_one_tick_runs_one_tick():
     clock = TickClock(0.01)
-    clock.advance(0.0, 0.01)
-    with pytest.raises(StepError, match="step_size = 0.01"):
-        clock.advance(0.01, 0.02)
+    assert [run(clock, n * 0.01, 0.01) for n in range(5)] == [1] * 5
+    assert clock.now == 0.05
+
+
+def test_any_step_runs_the_ticks_that_fall_within_it():
+    """Ticks of 0.01 s under steps of 0.025 s: 2, 3, 2, 3 ticks (ends 0.025, 0.05, ...)."""
+    clock = TickClock(0.01)
+    assert [run(clock, n * 0.025, 0.025) for n in range(4)] == [2, 3, 2, 3]
+    assert clock.ticks == 10
+
+
+def test_a_host_adding_floats_reaches_its_stop_time_and_its_remainder_step_runs_nothing():
+    """OMSimulator's way: 1000 steps of 0.01 s added up end at 9.999999999999831 s; its
+    remainder step (about 1e-13 s) ends at 10 s, where the last tick already ran."""
+    clock = TickClock(0.01)
+    time, steps = 0.0, []
+    while time < 10.0 - 1e-12:
+        steps.append(run(clock, time, 0.01))
+        time += 0.01
+    assert steps == [1] * 1000 and time != 10.0
+    assert run(clock, time, 10.0 - time) == 0
+    assert clock.ticks == 1000 and clock.now == 10.0
+
+
+def test_steps_shorter_than_a_tick_run_it_once_its_time_is_reached():
+    clock = TickClock(0.01)
+    assert [run(clock, n * 0.001, 0.001) for n in range(20)] == ([0] * 9 + [1]) * 2
+    assert clock.now == 0.02
+
+
+def test_a_request_not_at_the_end_of_the_last_or_not_positive_is_refused():
+    clock = TickClock(0.01)
+    run(clock, 0.0, 0.01)
     with pytest.raises(StepError, match="this component is at t = 0.01"):
-        clock.advance(0.5, 0.01)
+        clock.due(0.5, 0.01)
+    for bad in (0.0, -0.01, float("nan"), float("inf")):
+        with pytest.raises(StepError, match="must be positive and finite"):
+            clock.due(0.01, bad)
     assert clock.ticks == 1
 
 

@@ -17,6 +17,7 @@ import zipfile
 from collections.abc import Sequence
 from ctypes import byref
 from dataclasses import dataclass, replace
+from operator import attrgetter
 from pathlib import Path
 from typing import Any
 from xml.etree import ElementTree as ET
@@ -81,7 +82,9 @@ class FmuInfo:
     core_class: str | None
     variables: dict[str, Variable]
     feedthrough_inputs: frozenset[str]
-    """Inputs that some output depends on directly (ModelStructure dependencies)."""
+    """Inputs read at the end of a step: our FMUs list them in their VendorAnnotation
+    (``Core stepEndInputs``), another FMU's are the inputs its outputs depend on directly
+    (ModelStructure dependencies)."""
 
 
 _INFO_CACHE: dict[Path, FmuInfo] = {}
@@ -111,10 +114,14 @@ def fmu_info(path: Path) -> FmuInfo:
         for v in md.modelVariables
     }
     inputs = {v.name for v in md.modelVariables if v.causality == "input"}
-    feedthrough: set[str] = set()
-    for unknown in md.outputs:
-        deps = unknown.dependencies
-        feedthrough |= inputs if deps is None else {d.name for d in deps}
+    step_end = core.get("stepEndInputs") if core is not None else None
+    if step_end is not None:
+        feedthrough = set(step_end.split())
+    else:
+        feedthrough = set()
+        for unknown in md.outputs:
+            deps = unknown.dependencies
+            feedthrough |= inputs if deps is None else {d.name for d in deps}
     info = FmuInfo(
         path=path,
         model_name=md.modelName,
@@ -323,10 +330,11 @@ class FmuInstance:
         buffer = (_C_TYPES[kind] * len(vrs))()
         component, count, check = self._component, ctypes.c_size_t(len(vrs)), self._check_status
         refs_address, buffer_address = _address(refs), _address(buffer)
+        messages = self.messages
 
         def read():
             status = function(component, refs_address, count, buffer_address)
-            if status or self.messages:
+            if status or messages:
                 check(status, f"get{kind}")
             return buffer
 
@@ -339,11 +347,12 @@ class FmuInstance:
         buffer = (_C_TYPES[kind] * len(vrs))()
         component, count, check = self._component, ctypes.c_size_t(len(vrs)), self._check_status
         refs_address, buffer_address = _address(refs), _address(buffer)
+        messages = self.messages
 
         def write(values):
             buffer[:] = values
             status = function(component, refs_address, count, buffer_address)
-            if status or self.messages:
+            if status or messages:
                 check(status, f"set{kind}")
 
         return write
@@ -351,11 +360,11 @@ class FmuInstance:
     def stepper(self):
         """A function doing fmi2DoStep(t, h) without fmpy's per-call bookkeeping."""
         function = self._raw("fmi2DoStep", _DO_STEP)
-        component, check = self._component, self._check_status
+        component, check, messages = self._component, self._check_status, self.messages
 
         def step(time: float, step: float) -> None:
             status = function(component, time, step, 1)
-            if status or self.messages:
+            if status or messages:
                 check(status, f"doStep(t = {time!r} s, h = {step!r} s)")
 
         return step
@@ -455,10 +464,10 @@ class CoreInstance:
         """Like :meth:`FmuInstance.reader`; the buffer is a list."""
         names = [self._by_ref[vr].name for vr in vrs]
         buffer: list[Any] = [None] * len(names)
+        values = attrgetter(*names) if len(names) > 1 else lambda core: (getattr(core, names[0]),)
 
         def read():
-            core = self.core
-            buffer[:] = [getattr(core, name) for name in names]
+            buffer[:] = values(self.core)
             return buffer
 
         return read, buffer
@@ -478,12 +487,15 @@ class CoreInstance:
         return self.do_step
 
     def do_step(self, time: float, step: float) -> None:
+        core = self.core
         try:
-            self.core.do_step(time, step)
+            core.do_step(time, step)
         except Exception as error:
             raise CosimError(f"component '{self.name}': doStep(t = {time!r} s) failed: "
                              f"{error}") from error
-        _keep_warnings(self.warnings, self.core.take_notes())
+        notes = core.take_notes()
+        if notes:
+            _keep_warnings(self.warnings, notes)
 
     def reset(self) -> None:
         self.core = self.core_class()

@@ -26,6 +26,8 @@ timing``).
 """
 
 import graphlib
+import math
+import os
 from dataclasses import dataclass, field
 from operator import getitem
 from pathlib import Path
@@ -41,11 +43,12 @@ from altfusion.cosim.instances import (
     fmu_info,
 )
 from altfusion.cosim.results import Results
-from altfusion.cosim.system import SystemSpec
 from altfusion.errors import ParameterError
+from altfusion.systems.spec import SystemSpec
 from altfusion.timegrid import TickClock
 
-__all__ = ["MASTERS", "CosimError", "Simulation", "simulate"]
+__all__ = ["MASTERS", "CosimError", "RunInterruptedError", "Simulation", "recorded_columns",
+           "recording_size", "simulate"]
 
 MASTERS = ("ordered", "jacobi")
 """Master algorithms: ordered stepping (the default) and Jacobi (every input latched)."""
@@ -95,9 +98,11 @@ class _Stepped:
         self._latch_sources = [link.source.source(link) for _, _, link in self.delayed]
         self._latched = [None] * len(self.delayed)
         inputs: dict[tuple[str, int], list[tuple[int, tuple[Any, int]]]] = {}
+        latched_groups: set[tuple[str, int]] = set()
         for position, (kind, vr, link) in enumerate(self.delayed):
             inputs.setdefault((kind, link.source.ratio), []).append(
                 (vr, (self._latched, position)))
+            latched_groups.add((kind, link.source.ratio))
         for kind, vr, link in self.feedthrough:
             inputs.setdefault((kind, link.source.ratio), []).append(
                 (vr, link.source.source(link)))
@@ -105,7 +110,24 @@ class _Stepped:
                           tuple(buffer for _, (buffer, _slot) in entries),
                           tuple(slot for _, (_buffer, slot) in entries))
                          for (kind, _ratio), entries in inputs.items()]
+        self._writer_phases = self._phases([None if key in latched_groups else key[1]
+                                            for key in inputs])
         self.step = self.instance.stepper()
+
+    def _phases(self, source_ratios: list[int | None]) -> tuple[tuple[int, ...], ...]:
+        """The writers worth checking at each of this component's steps, by phase
+        ``(end // ratio) % len(phases)`` of the base tick ``end`` the step ends at.
+
+        A writer fed straight by sources of ratio r (feedthrough) can only see new values if
+        a source stepped since this component last set its inputs, in the base ticks
+        (end - ratio, end]; otherwise its values are those already written, and comparing
+        them again is skipped. A writer with latched inputs (None) is checked at every step.
+        """
+        period = math.lcm(self.ratio, *(r for r in source_ratios if r is not None))
+        return tuple(
+            tuple(index for index, r in enumerate(source_ratios)
+                  if r is None or end // r != (end - self.ratio) // r)
+            for end in range(0, period, self.ratio))
 
     def source(self, link: _Link) -> tuple[Any, int]:
         """The (buffer, slot) holding the output a link reads."""
@@ -138,7 +160,8 @@ class _Stepped:
     def apply_inputs(self) -> None:
         """Set the inputs, one call per writer; a writer whose values are all unchanged since
         the last call is not called again (an FMU keeps its inputs: fmi2Set* is only needed
-        for a change, and sample-held sensor signals change at their own rate)."""
+        for a change, and sample-held sensor signals change at their own rate). The stepping
+        loop does the same inline, checking only the writers of :meth:`_phases`."""
         written = self._written
         for index, (write, buffers, slots) in enumerate(self._writers):
             values = list(map(getitem, buffers, slots))
@@ -159,6 +182,15 @@ class RunFailedError(CosimError):
         self.results = results
 
 
+class RunInterruptedError(RunFailedError):
+    """The run was stopped by :meth:`Simulation.interrupt` (Ctrl-C); ``results`` holds the
+    rows recorded before."""
+
+
+class _InterruptRequestError(Exception):
+    """Raised inside the stepping loop when an interruption was requested."""
+
+
 class Simulation:
     """A system ready to run, repeatedly: instances are created once and reset between runs."""
 
@@ -175,6 +207,7 @@ class Simulation:
         self._components: list[_Stepped] = []
         self._by_name: dict[str, _Stepped] = {}
         self._runs = 0
+        self._interrupted = False
         instance_class = FmuInstance if backend == "fmu" else CoreInstance
         try:
             for index, spec in enumerate(system.components):
@@ -319,9 +352,7 @@ class Simulation:
         """Simulate from the start time to ``stop_time`` (default: the system's)."""
         system = self.system
         stop = system.stop_time if stop_time is None else stop_time
-        steps = self.base.ticks_in(stop - system.start_time, "stop_time")
-        interval = system.output_interval or system.base_step
-        every = self.base.ticks_in(interval, "output_interval", allow_zero=False)
+        steps, every, rows = recording_size(system, stop, len(self._recorded))
         overrides = self._split_parameters(parameters or {})
         if self._runs:
             for component in self._components:
@@ -330,7 +361,6 @@ class Simulation:
             component.instance.warnings.clear()
         self._runs += 1
         self._initialize(stop, overrides)
-        rows = steps // every + 1
         data = np.empty((rows, len(self._recorded)))
         times = np.full(rows, np.nan)
         self._record(data, times, 0, 0)
@@ -339,28 +369,51 @@ class Simulation:
         except Exception as error:
             recorded = int(np.isfinite(times).sum())    # rows are recorded in order
             partial = self._results(times[:recorded], data[:recorded])
+            if isinstance(error, _InterruptRequestError):
+                self._interrupted = False
+                raise RunInterruptedError(f"interrupted after t = {times[recorded - 1]:g} s",
+                                          partial) from None
             raise RunFailedError(f"{error}", partial) from error
         for component in self._components:
             component.instance.terminate()
         return self._results(times, data)
 
+    def interrupt(self) -> None:
+        """Stop the run in progress (or the next one) after its current base step, as
+        :class:`RunInterruptedError`: safe to call from a signal handler, unlike raising
+        KeyboardInterrupt, which inside an FMU's Python code becomes its fmi2Fatal."""
+        self._interrupted = True
+
     def _loop(self, steps: int, every: int, data: np.ndarray, times: np.ndarray) -> None:
-        """The stepping loop of :meth:`run`, recording every ``every`` base steps."""
+        """The stepping loop of :meth:`run`, recording every ``every`` base steps.
+
+        The same as, for each base tick: latch the delayed inputs of the components starting
+        a step, then, upstream first, for each component ending a step at tick ``end``:
+        :meth:`_Stepped.apply_inputs`, ``step``, :meth:`_Stepped.refresh_outputs`; with the
+        calls inlined and only the writers whose sources may have changed compared."""
         tick_time = self.base.time
         t_previous = tick_time(0)
         latching = [(c.ratio, c.latch) for c in self._components if c.delayed]
-        stepping = [(c.ratio, c.apply_inputs, c.step, c._linked_reads) for c in self._order]
+        stepping = [(c.ratio, c._writer_phases, len(c._writer_phases), c._writers, c._written,
+                     c.step, c._linked_reads) for c in self._order]
         recorded_only = [c.refresh_recorded for c in self._components if c._recorded_reads]
         for n in range(steps):
+            if self._interrupted:
+                raise _InterruptRequestError
             for ratio, latch in latching:
                 if n % ratio == 0:
                     latch()
             end = n + 1
             t_end = tick_time(end)
-            for ratio, apply_inputs, step, linked_reads in stepping:
+            for ratio, phases, period, writers, written, step, linked_reads in stepping:
                 if end % ratio:
                     continue
-                apply_inputs()
+                for index in phases[end // ratio % period]:       # apply_inputs(), inlined
+                    write, buffers, slots = writers[index]
+                    values = list(map(getitem, buffers, slots))
+                    if values != written[index]:
+                        write(values)
+                        written[index] = values
                 t_start = t_previous if ratio == 1 else tick_time(end - ratio)
                 step(t_start, t_end - t_start)
                 for read in linked_reads:               # refresh_outputs(), inlined
@@ -422,6 +475,47 @@ class Simulation:
 
     def __exit__(self, *_exc) -> None:
         self.close()
+
+
+def physical_memory() -> int:
+    """This machine's memory in bytes (1 TiB where the system does not say)."""
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (AttributeError, ValueError, OSError):
+        return 1 << 40
+
+
+def _magnitude(count: int) -> str:
+    """``count`` in three significant digits, however large (no float overflow)."""
+    digits = str(count)
+    return digits if len(digits) <= 4 else f"{digits[0]}.{digits[1:3]}e{len(digits) - 1}"
+
+
+def recorded_columns(system: SystemSpec, fmu_paths: dict[str, Path]) -> int:
+    """How many signals a run of ``system`` records: its ``record`` list, else every output
+    (read from the modelDescriptions, no FMU instantiated)."""
+    if system.record:
+        return len(system.record)
+    return sum(1 for c in system.components for v in fmu_info(fmu_paths[c.fmu]).variables.values()
+               if v.causality == "output" and v.type in FMI_TYPES)
+
+
+def recording_size(system: SystemSpec, stop: float, columns: int) -> tuple[int, int, int]:
+    """``(base steps, base steps per recorded row, rows)`` of a run of ``system`` to ``stop``
+    recording ``columns`` signals; a ParameterError naming ``stop_time`` when the table (the
+    signals and the time, 8 bytes each) would exceed this machine's memory, before anything is
+    allocated."""
+    base = TickClock(system.base_step, system.start_time, name="base_step")
+    steps = base.ticks_in(stop - system.start_time, "stop_time")
+    every = base.ticks_in(system.output_interval or system.base_step, "output_interval",
+                          allow_zero=False)
+    rows = steps // every + 1
+    size, memory = rows * (columns + 1) * 8, physical_memory()
+    if size > memory:
+        raise ParameterError("stop_time", stop, f"recording {_magnitude(rows)} rows of "
+                             f"{columns} signals needs {_magnitude(size >> 30)} GiB, more "
+                             f"than this machine's {memory >> 30} GiB of memory")
+    return steps, every, rows
 
 
 def simulate(system: SystemSpec, fmu_paths: dict[str, Path], backend: str = "fmu",

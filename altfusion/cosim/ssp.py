@@ -1,11 +1,23 @@
 """SSP 1.0 archives (``.ssp``) for our systems: a writer and a reader.
 
 The writer embeds the FMUs under ``resources/`` and declares every component's inputs,
-outputs and bound parameters as typed connectors (units from the modelDescription). Timing
-uses the Open Simulation Platform annotations that libcosim reads (base step on the
-DefaultExperiment, ``osp:StepSizeHint`` per component); recording and error metrics go in an
-``org.altfusion.cosim`` annotation that other tools ignore. The reader parses and
-schema-validates the SSD with fmpy's SSP reader and reads those annotations.
+outputs and bound parameters as typed connectors (units from the modelDescription). An archive
+holds two descriptions of the same system:
+
+* ``SystemStructure.ssd``, the one every host reads: components, their parameter bindings
+  (each component's ``step_size``, its tick, among them), connections, units, the
+  DefaultExperiment with OSP's base step (``osp:FixedStepAlgorithm``) and our recording and
+  error metrics (an ``org.altfusion.cosim`` annotation other tools ignore), and on the system
+  OMSimulator's annotation (a fixed-step master on the base step), which its command line
+  needs. It has no annotation on a component, which OMSimulator's command line refuses, and
+  no String binding equal to the FMU's default (its command line cannot set a String:
+  ``docs/interop.md``). Every host can step every component on the base step: each FMU ticks
+  on its own ``step_size``.
+* :data:`OSP_SSD`, the same with OSP's ``osp:StepSizeHint`` on each component, from which
+  libcosim and ECOS step each component at its own rate (:mod:`altfusion.interop.engines`).
+
+The reader parses and schema-validates ``SystemStructure.ssd`` with fmpy's SSP reader and
+reads those annotations.
 """
 
 import tempfile
@@ -19,8 +31,8 @@ from fmpy import read_model_description
 from fmpy.ssp.ssd import read_ssd
 from lxml import etree
 
-from altfusion.cosim.system import ComponentSpec, Connection, Metric, SystemSpec
 from altfusion.errors import UsageError
+from altfusion.systems.spec import ComponentSpec, Connection, Metric, SystemSpec
 from altfusion.units import BASE_UNITS
 from altfusion.version import CORE_VERSION
 
@@ -30,10 +42,16 @@ NS = {
     "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues",
     "osp": "http://opensimulationplatform.com/SSP/OSPAnnotations",
     "af": "urn:altfusion:cosim",
+    "oms": "https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/schema/oms.xsd",
 }
 OSP_ANNOTATION = "com.opensimulationplatform"
+OMS_ANNOTATION = "org.openmodelica"
+"""OMSimulator's annotation: the system type (weakly coupled, its fixed-step master) and the
+master's step, which its command line needs to import an SSP."""
 AF_ANNOTATION = "org.altfusion.cosim"
 FMU_MIME = "application/x-fmu-sharedlibrary"
+OSP_SSD = "SystemStructureOSP.ssd"
+"""The archive's second description: ``SystemStructure.ssd`` with each component's step hint."""
 
 for _prefix, _uri in NS.items():
     ET.register_namespace(_prefix, _uri)
@@ -61,9 +79,23 @@ def _annotation(parent: ET.Element, annotation_type: str) -> ET.Element:
     return ET.SubElement(annotations, _q("ssc", "Annotation"), type=annotation_type)
 
 
-def system_structure(system: SystemSpec, fmu_paths: dict[str, Path]) -> ET.Element:
-    """The SystemStructureDescription element of ``system``."""
-    root = ET.Element(_q("ssd", "SystemStructureDescription"), version="1.0", name=system.name,
+def _bindings(component: ComponentSpec, md) -> dict[str, Any]:
+    """The parameters to bind: the component's (a String only if it is not the FMU's
+    default) and its ``step_size``."""
+    defaults = {v.name: v.start for v in md.modelVariables if v.type == "String"}
+    return {**{name: value for name, value in component.parameters.items()
+               if not (isinstance(value, str) and defaults.get(name) == value)},
+            "step_size": component.step_size}
+
+
+def system_structure(system: SystemSpec, fmu_paths: dict[str, Path],
+                     step_hints: bool = False) -> ET.Element:
+    """The SystemStructureDescription element of ``system`` (with ``step_hints``, each
+    component's ``osp:StepSizeHint``: :data:`OSP_SSD`)."""
+    # The OSP description's own name: OMSimulator's Python API takes every .ssd of an archive
+    # as a variant, named after it.
+    name = f"{system.name}_osp" if step_hints else system.name
+    root = ET.Element(_q("ssd", "SystemStructureDescription"), version="1.0", name=name,
                       generationTool=f"altfusion {CORE_VERSION}")
     sys_el = ET.SubElement(root, _q("ssd", "System"), name=system.name,
                            description=system.description)
@@ -76,7 +108,7 @@ def system_structure(system: SystemSpec, fmu_paths: dict[str, Path]) -> ET.Eleme
         comp_el = ET.SubElement(elements, _q("ssd", "Component"), name=component.name,
                                 type=FMU_MIME, source=f"resources/{component.fmu}.fmu")
         connectors = ET.SubElement(comp_el, _q("ssd", "Connectors"))
-        bound = dict(component.parameters, step_size=component.step_size)
+        bound = _bindings(component, md)
         for var in md.modelVariables:
             if var.causality in ("input", "output") or var.name in bound:
                 kind = var.causality
@@ -93,14 +125,20 @@ def system_structure(system: SystemSpec, fmu_paths: dict[str, Path]) -> ET.Eleme
         for name, value in bound.items():
             ET.SubElement(params_el, _q("ssv", "Parameter"), name=name)
             _typed_value(params_el[-1], "ssv", value)
-        hint = _annotation(comp_el, OSP_ANNOTATION)
-        ET.SubElement(hint, _q("osp", "StepSizeHint"), value=repr(component.step_size))
+        if step_hints:
+            hint = _annotation(comp_el, OSP_ANNOTATION)
+            ET.SubElement(hint, _q("osp", "StepSizeHint"), value=repr(component.step_size))
     connections = ET.SubElement(sys_el, _q("ssd", "Connections"))
     for connection in system.connections:
         start_el, start_var = connection.start.split(".", 1)
         end_el, end_var = connection.end.split(".", 1)
         ET.SubElement(connections, _q("ssd", "Connection"), startElement=start_el,
                       startConnector=start_var, endElement=end_el, endConnector=end_var)
+    oms = ET.SubElement(_annotation(sys_el, OMS_ANNOTATION), _q("oms", "Annotations"))
+    ET.SubElement(ET.SubElement(oms, _q("oms", "SimulationInformation")),
+                  _q("oms", "FixedStepMaster"), description="oms-ma",
+                  stepSize=repr(system.base_step), absoluteTolerance="0.0001",
+                  relativeTolerance="0.0001")
     units = ET.SubElement(root, _q("ssd", "Units"))
     for unit in sorted(used_units):
         unit_el = ET.SubElement(units, _q("ssc", "Unit"), name=unit)
@@ -110,7 +148,9 @@ def system_structure(system: SystemSpec, fmu_paths: dict[str, Path]) -> ET.Eleme
                                startTime=repr(system.start_time), stopTime=repr(system.stop_time))
     algorithm = ET.SubElement(_annotation(experiment, OSP_ANNOTATION), _q("osp", "Algorithm"))
     ET.SubElement(algorithm, _q("osp", "FixedStepAlgorithm"), baseStepSize=repr(system.base_step))
-    ours = ET.SubElement(_annotation(root, AF_ANNOTATION), _q("af", "Cosim"))
+    # Beside OSP's on the DefaultExperiment: OMSimulator refuses other annotations at the top.
+    ours = ET.SubElement(ET.SubElement(experiment[0], _q("ssc", "Annotation"),
+                                       type=AF_ANNOTATION), _q("af", "Cosim"))
     recording = ET.SubElement(ours, _q("af", "Recording"))
     if system.output_interval is not None:
         recording.set("interval", repr(system.output_interval))
@@ -124,13 +164,13 @@ def system_structure(system: SystemSpec, fmu_paths: dict[str, Path]) -> ET.Eleme
 
 def write_ssp(system: SystemSpec, fmu_paths: dict[str, Path], path: Path) -> Path:
     """Write ``system`` as an SSP archive embedding its FMUs; return the path."""
-    root = system_structure(system, fmu_paths)
-    ET.indent(root)
-    xml = ET.tostring(root, encoding="UTF-8", xml_declaration=True)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as archive:
-        archive.writestr("SystemStructure.ssd", xml)
+        for name, step_hints in (("SystemStructure.ssd", False), (OSP_SSD, True)):
+            root = system_structure(system, fmu_paths, step_hints)
+            ET.indent(root)
+            archive.writestr(name, ET.tostring(root, encoding="UTF-8", xml_declaration=True))
         for fmu in sorted({c.fmu for c in system.components}):
             archive.write(fmu_paths[fmu], f"resources/{fmu}.fmu")
     return path
@@ -159,6 +199,10 @@ class LoadedSystem:
 def read_ssp(path: Path) -> LoadedSystem:
     """Read and schema-validate an SSP archive written by :func:`write_ssp`."""
     path = Path(path)
+    if path.is_dir():
+        found = sorted(path.glob("*.ssp"))
+        hint = f", such as {found[0]}" if found else ""
+        raise UsageError(f"{path}: a folder; expected an SSP archive (a .ssp file){hint}")
     if not path.is_file():
         raise UsageError(f"{path}: no such file")
     try:
@@ -196,7 +240,8 @@ def read_ssp(path: Path) -> LoadedSystem:
     )
     experiment = root.find("ssd:DefaultExperiment", NS)
     algorithm = experiment.find(".//osp:FixedStepAlgorithm", NS)
-    ours = root.find(f"ssd:Annotations/ssc:Annotation[@type='{AF_ANNOTATION}']/af:Cosim", NS)
+    ours = experiment.find(f"ssd:Annotations/ssc:Annotation[@type='{AF_ANNOTATION}']/af:Cosim",
+                           NS)
     recording = ours.find("af:Recording", NS) if ours is not None else None
     interval = recording.get("interval") if recording is not None else None
     spec = SystemSpec(

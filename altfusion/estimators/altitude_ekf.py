@@ -19,7 +19,7 @@ latest one, held):
        terrain_psd and gps_bias_psd on the others (0 on the reference's frozen states)
 
 Without an accelerometer acc_z is taken as 0, so that b_a carries minus the vehicle's
-acceleration: a constant-acceleration model (seed 003's eq. 11 with white jerk), b_a a random
+acceleration: a constant-acceleration model (yang2020's eq. 11 with white jerk), b_a a random
 walk of ``jerk_psd``, plus white acceleration of ``accel_psd`` on (h, v).
 
 Measurements (one scalar update each, Joseph form, ``kalman.update_scalar``), each at its own
@@ -29,7 +29,7 @@ h(s) = h - δ·v + δ²/2·a and v(s) = v - δ·a, and the Jacobian row follows 
 
     baro:  z = h(s) + d + k·(h(s) - h_c)    (h_c: height at start; d = k = 0: height_ref baro)
     GNSS height:  z = h(s) + g    (g = 0: height_ref gps),
-                  σ = gps_noise·(VDOP/gps_vdop_ref)·√max(1, gps_nsat_ref/N)  (seed 001)
+                  σ = gps_noise·(VDOP/gps_vdop_ref)·√max(1, gps_nsat_ref/N)  (bao2017)
     GNSS vertical speed:  z = v(s);   radar, laser:  z = h(s) - t
 
 Each sample passes the shared innovation gate (``gate_sigma``, PX4's 5σ) and health logic of
@@ -50,9 +50,9 @@ Deviations from PX4 EKF2 (reasons in docs/altitude_ekf.md):
   being observed and the remaining sources carry the height without a step;
 * the ground-effect dead zone applies within ``ground_effect_height`` of the terrain (or of
   the starting height), not on a land detector's flag; off by default;
-* optional innovation-based noise adaptation (seed 004): each source's R is scaled by its
+* optional innovation-based noise adaptation (xu2016): each source's R is scaled by its
   windowed mean normalized innovation squared, bounded to [1, ``adaptive_max``];
-* the barometer's temperature error (seed 000) is the scale-factor state k, not a
+* the barometer's temperature error (whang2008) is the scale-factor state k, not a
   temperature model: ``baro_p`` and ``baro_T`` are read but not fused.
 """
 
@@ -60,17 +60,10 @@ import math
 from dataclasses import dataclass
 
 from altfusion.errors import ParameterError
-from altfusion.estimators.base import (
-    ACC,
-    BARO_ALL,
-    GPS_ALL,
-    LASER,
-    MAX_DELAY,
-    RADAR,
-    Estimator,
-    HealthParams,
-)
+from altfusion.estimators.base import MAX_DELAY, Estimator, HealthParams, Verdict
+from altfusion.estimators.health import UNKNOWN_STD
 from altfusion.estimators.kalman import quadratic_form, shift_state, update_scalar
+from altfusion.estimators.streams import ACC, BARO_ALL, GPS_ALL, LASER, RADAR
 from altfusion.params import param
 
 H, V, BA, D, K, T, G = range(7)
@@ -98,7 +91,7 @@ class AltitudeEKFParams(HealthParams):
                                             "fused", positive=True)
     jerk_psd: float = param(0.01, "m2/s5", "PSD of the white jerk driving the motion model's "
                                            "acceleration (state b_a) while no accelerometer is "
-                                           "fused (seed 003's jerk_psd)", min=0.0)
+                                           "fused (yang2020's jerk_psd)", min=0.0)
     acc_bias_psd: float = param(1e-5, "m2/s5", "PSD of the accelerometer-bias random walk "
                                                "(PX4 EKF2_ACC_B_NOISE 0.003 m/s³ squared)",
                                 min=0.0)
@@ -111,7 +104,7 @@ class AltitudeEKFParams(HealthParams):
     terrain_psd: float = param(0.01, "m2/s", "PSD of the terrain-height random walk",
                                min=0.0)
     gps_dop_scaling: bool = param(True, None, "Scale the GNSS height noise by VDOP and the "
-                                              "satellite count (seed 001)")
+                                              "satellite count (bao2017)")
     gps_vdop_ref: float = param(1.0, "1", "VDOP at which gps_noise holds: the GNSS noise is "
                                           "scaled by VDOP/gps_vdop_ref", positive=True)
     gps_nsat_ref: int = param(6, None, "Satellites below which the GNSS noise grows as "
@@ -136,7 +129,7 @@ class AltitudeEKFParams(HealthParams):
     ground_effect_height: float = param(1.0, "m", "Height above the terrain within which the "
                                                   "ground-effect dead zone applies", min=0.0)
     adaptive_noise: bool = param(False, None, "Scale each source's R by its windowed mean "
-                                              "normalized innovation squared (seed 004)")
+                                              "normalized innovation squared (xu2016)")
     adaptive_window: float = param(20.0, "1", "Samples in the exponential window of the "
                                               "noise adaptation", min=1.0)
     adaptive_max: float = param(10.0, "1", "Largest factor of the noise adaptation",
@@ -267,7 +260,7 @@ class AltitudeEKF(Estimator):
     def fuse_samples(self, samples) -> None:
         self._predict(samples.get(ACC))
         if ACC in samples:
-            self.accept("acc")
+            self.accept(self.aid["acc"])
         gps = samples.get(GPS_ALL)
         if gps is not None:
             instant = gps["gps_time"] - self.params.gps_delay
@@ -311,7 +304,7 @@ class AltitudeEKF(Estimator):
         x[V] -= share * min(x[V], 0.0)
 
     def _gps_sigma(self, sample) -> float:
-        """σ_G = gps_noise·(VDOP/gps_vdop_ref)·√max(1, N_ref/N) (seed 001's η; VDOP or N
+        """σ_G = gps_noise·(VDOP/gps_vdop_ref)·√max(1, N_ref/N) (bao2017's η; VDOP or N
         not given: factor 1)."""
         p = self.params
         if not p.gps_dop_scaling:
@@ -378,7 +371,7 @@ class AltitudeEKF(Estimator):
         elif self._reference_first(y, S):
             self._fuse_height(source, z, stamp, sigma)     # sets its offset anew
             return
-        if not self.gate(source, y, S, self.params.gate_sigma):
+        if self.gate(self.aid[source], y, S, self.params.gate_sigma) is not Verdict.FUSED:
             return
         self._range_rejected_since.pop(source, None)
         if source == self._reference:
@@ -395,7 +388,7 @@ class AltitudeEKF(Estimator):
         y = vz - v_s
         S = self.P[V][V] + (2.0 * delta * self.P[V][BA] + delta * delta * self.P[BA][BA]
                             if len(row) > 1 else 0.0) + R
-        if self.gate("gps_vz", y, S, self.params.gate_sigma):
+        if self.gate(self.aid["gps_vz"], y, S, self.params.gate_sigma) is Verdict.FUSED:
             self.x, self.P, _ = update_scalar(self.x, self.P, row, y, R)
 
     def _ground_effect(self, y: float) -> float:
@@ -416,7 +409,7 @@ class AltitudeEKF(Estimator):
         if p.gate_sigma <= 0.0 or y * y <= p.gate_sigma**2 * S:
             return False
         since = self._range_rejected_since.setdefault(source, self.time)
-        if self.time - since < p.reset_timeout or not self.contradicted(source, y):
+        if self.time - since < p.reset_timeout or not self.contradicted(self.aid[source], y):
             return False
         self._range_rejected_since.pop(source)
         self.x[T] -= y
@@ -426,7 +419,7 @@ class AltitudeEKF(Estimator):
         self.n_terrain_resets += 1
         self.note(f"{source}: inconsistent for {p.reset_timeout:g} s while the height is "
                   f"aided: terrain reset by {-y:.3g} m")
-        self.accept(source)
+        self.accept(self.aid[source])
         return True
 
     def _reference_step(self, source: str, y: float, S: float) -> bool:
@@ -444,10 +437,10 @@ class AltitudeEKF(Estimator):
             return False
         now = self.time
         if self._reference_rejected_since is None:
-            in_use = now - self._last_fused.get(source, -math.inf) <= p.reset_timeout
+            in_use = now - self.aid[source].last_fused <= p.reset_timeout
             self._reference_rejected_since = now if in_use else math.inf
         if now - self._reference_rejected_since < p.reset_timeout \
-                or self.contradicted(source, y):
+                or self.contradicted(self.aid[source], y):
             return False
         self._reset_to_reference(y, S)
         return True
@@ -471,11 +464,11 @@ class AltitudeEKF(Estimator):
 
     def _reset_to_reference(self, y: float, S: float) -> None:
         self._reference_rejected_since = None
-        self.height_reset(self._reference, y, S, f"the height reference rejected for "
+        self.height_reset(self.aid[self._reference], y, S, f"the height reference rejected for "
                                                  f"{self.params.reset_timeout:g} s")
 
     def _adaptation(self, source: str) -> float:
-        """The factor on R of seed 004's bounded innovation-based adaptation (1: off)."""
+        """The factor on R of xu2016's bounded innovation-based adaptation (1: off)."""
         if not self.params.adaptive_noise:
             return 1.0
         return min(max(self._nis.get(source, 1.0), 1.0), self.params.adaptive_max)
@@ -518,7 +511,7 @@ class AltitudeEKF(Estimator):
         self.h_c = x[H]
         self._reference_seen = source == self._reference
         self.started = True
-        self.accept(source)
+        self.accept(self.aid[source])
 
     def _first_sample(self, source: str, z: float, sigma: float) -> bool:
         """The first sample of the reference after a start from another source: see
@@ -553,7 +546,7 @@ class AltitudeEKF(Estimator):
             return False                                  # the datum: its prior
         self.x[index] = value
         self.P[index][index] = 0.0 if frozen else self.P[H][H] + sigma * sigma
-        self.accept(source)
+        self.accept(self.aid[source])
         return True
 
     def _first_reference(self, z: float, sigma: float) -> bool:
@@ -595,7 +588,7 @@ class AltitudeEKF(Estimator):
     def _publish(self) -> None:
         x, P = self.x, self.P
         self.h_est, self.vz_est = x[H], x[V]
-        self.h_std = math.sqrt(max(P[H][H], 0.0))
+        self.h_std = math.sqrt(max(P[H][H], 0.0)) if self.started else UNKNOWN_STD
         self.vz_std = math.sqrt(max(P[V][V], 0.0))
         self.acc_bias = x[BA] if self._acc_used else 0.0
         self.baro_bias = x[D]

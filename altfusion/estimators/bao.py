@@ -1,4 +1,4 @@
-"""BaoDriftEstimator: barometer error correction with an adaptive drift Kalman filter (seed 001).
+"""BaoDriftEstimator: barometer error correction with an adaptive drift Kalman filter (bao2017).
 
 Fig. 3 of the paper, block by block. Each ε is a correction, true minus barometric height: the
 paper writes the baro height as H_B = h_t - δh_B (Section 3.3) and δh_B = ε_p + ε_d + ε_e
@@ -24,7 +24,7 @@ paper writes the baro height as H_B = h_t - δh_B (Section 3.3) and δh_B = ε_p
   Z = H_G - H_B = δh_B + δh_G with H = [1], at each GPS sample against the latest corrected baro
   height; the measurement noise R_k = η_k·C of eq. (14).
 
-The factor η of eq. (14), which the paper does not define (NOTES.md): the GPS height error is
+The factor η of eq. (14), which the paper does not define (docs/papers.md): the GPS height error is
 modelled as σ_G = UERE·VDOP·√max(1, N_ref/N), the user-equivalent range error times the
 vertical dilution of precision, growing further when fewer than N_ref satellites are used (the
 same model as the GnssReceiver FMU). C is the variance at the worst accuracy the filter
@@ -42,9 +42,9 @@ Deviations from the paper:
 
 * Eq. (11)'s P_S' is read as the undisturbed static pressure (measured + ½ρv²), which makes
   the wind correction exact; the paper leaves it open, and reading it as the measured
-  pressure differs in the second order only. This reading is ours (the seeds' NOTES.md
-  discusses only Table 3's values).
-* η of eq. (14), which the paper does not define: the GPS error model above (seeds NOTES.md
+  pressure differs in the second order only. This reading is ours (the reading notes in
+  docs/papers.md discuss only Table 3's values).
+* η of eq. (14), which the paper does not define: the GPS error model above (docs/papers.md
   asks for one).
 * GPS gate: a sample whose innovation exceeds ``gate_sigma`` standard deviations √(P + R_k)
   is rejected and logged.
@@ -63,7 +63,7 @@ Scenarios of the paper (for the systems that will reproduce them):
 * Section 4.2 (wind): static at the ground, AirDataModule at 10 Hz (MS5611, Table 1) with the
   wind's dynamic pressure and ρ = 1.25 kg/m³ (eq. 7), Atmosphere wind 1.5 / 2.5 / 3.5 m/s for
   about 1 min after 1 min of calm; ``use_wind`` true. At ISA sea level eq. (11) gives
-  0.117 / 0.325 / 0.637 m (Table 3's values need a warmer day, NOTES.md).
+  0.117 / 0.325 / 0.637 m (Table 3's values need a warmer day, docs/papers.md).
 * Section 4.3 (static drift): 1 h at a fixed height, no wind, AirDataModule at 10 Hz with a
   drift of about +10 m/h (Fig. 1), GnssReceiver (u-blox LEA-6H) at 5 Hz with VDOP and satellite
   count varying (``dop_mode`` scheduled or random, the same ``user_range_error`` and
@@ -76,8 +76,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from altfusion.constants import G0, ISA_LAPSE_RATE, ISA_P0, ISA_T0, R_AIR
-from altfusion.estimators.base import BARO_P, GPS_QUALITY, Estimator, HealthParams, Stream
+from altfusion.estimators.base import Estimator, HealthParams, Verdict
 from altfusion.estimators.kalman import predict, update
+from altfusion.estimators.streams import BARO_P, GPS_QUALITY, Stream
 from altfusion.params import param
 from altfusion.physics.barometric import height_from_pressure
 
@@ -153,7 +154,7 @@ class BaoParams(HealthParams):
 
 
 class BaoDriftEstimator(Estimator):
-    """Bao et al.'s barometer error correction (seed 001, Fig. 3): principle error, wind
+    """Bao et al.'s barometer error correction (bao2017, Fig. 3): principle error, wind
     disturbance and a drift Kalman filter with the adaptive R of eq. (14)."""
 
     Params = BaoParams
@@ -198,11 +199,12 @@ class BaoDriftEstimator(Estimator):
         on its jump from the last accepted one (not in the paper)."""
         p = self.params
         if not self.started:
-            self.accept("baro")
+            self.accept(self.aid["baro"])
         else:
             elapsed, self._baro_time = stamp - self._baro_time, stamp
-            if not self.gate("baro", h_baro - self.h_baro,
-                             self.jump_variance(p.R_baro, elapsed), p.gate_sigma):
+            verdict = self.gate(self.aid["baro"], h_baro - self.h_baro,
+                                self.jump_variance(p.R_baro, elapsed), p.gate_sigma)
+            if verdict is not Verdict.FUSED:
                 return
         self._baro_time = self._baro_accepted = stamp
         H = self.h_est if self.started else h_baro       # "the altitude of the last time"
@@ -235,7 +237,7 @@ class BaoDriftEstimator(Estimator):
         z = h_gps - self.h_baro_corrected                                       # (13)
         innovation = z - float(self.x[0])
         variance = float(self.P[0, 0]) + R
-        if not self.gate("gps", innovation, variance, p.gate_sigma):
+        if self.gate(self.aid["gps"], innovation, variance, p.gate_sigma) is not Verdict.FUSED:
             return
         result = update(self.x, self.P, z, ONE, R)
         self.x, self.P = result.x, result.P

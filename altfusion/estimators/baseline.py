@@ -24,8 +24,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from altfusion.estimators.base import BARO, GPS, Estimator, HealthParams, Stream
+from altfusion.estimators.base import Estimator, HealthParams, Verdict
 from altfusion.estimators.kalman import predict, shift_state, update
+from altfusion.estimators.streams import BARO, GPS, Stream
 from altfusion.params import param
 
 H_BARO = np.array([[1.0, 0.0, 1.0]])
@@ -37,9 +38,9 @@ class BaselineKFParams(HealthParams):
     accel_psd: float = param(0.5, "m2/s3", "PSD q_a of the white vertical acceleration",
                              positive=True)
     bias_psd: float = param(0.05, "m2/s", "PSD q_b of the baro-bias random walk", min=0.0)
-    R_baro: float = param(25.0, "m2", "Baro height noise variance R_B (seed 000: 5² m²)",
+    R_baro: float = param(25.0, "m2", "Baro height noise variance R_B (whang2008: 5² m²)",
                           positive=True)
-    R_gps: float = param(4900.0, "m2", "GPS height noise variance R_G (seed 000: 70² m²)",
+    R_gps: float = param(4900.0, "m2", "GPS height noise variance R_G (whang2008: 70² m²)",
                          positive=True)
     P0_h: float = param(100.0, "m2", "Initial altitude variance at the first sample",
                         positive=True)
@@ -90,12 +91,13 @@ class BaselineKF(Estimator):
         if not self.started:
             self.x[0] = z - self.x[2] if stream is BARO else z
             self.started = True
-            self.accept(stream.prefix)
+            self.accept(self.aid[stream.prefix])
             self._publish()
             return
         innovation = z - float((H @ self.x)[0])
         variance = float((H @ self.P @ H.T)[0, 0]) + R
-        if not self.gate(stream.prefix, innovation, variance, p.gate_sigma):
+        verdict = self.gate(self.aid[stream.prefix], innovation, variance, p.gate_sigma)
+        if verdict is not Verdict.FUSED:
             self._publish()
             return
         result = update(self.x, self.P, z, H, R)

@@ -1,4 +1,4 @@
-"""HajiyevAdaptiveEstimator: maximum-likelihood baro/GPS fusion with adaptive gain (seed 002).
+"""HajiyevAdaptiveEstimator: maximum-likelihood baro/GPS fusion with adaptive gain (hajiyev).
 
 Maximum-likelihood fusion of simultaneous baro and GPS altitudes (eqs. 11-19):
 
@@ -11,7 +11,7 @@ variance, Δ² ≥ R_GPS + R_B (condition 28), the baro noise is scaled by the a
     S(k) = (Δ² - R_GPS) / R_B                                           (30)
     K(k) = S R_B / (S R_B + R_GPS),   P(k) = R_GPS K(k)                  (27), (31)
 
-and S = 1 otherwise (seeds NOTES.md). This is the shared Kalman update of a prior h^B with
+and S = 1 otherwise (docs/papers.md). This is the shared Kalman update of a prior h^B with
 variance S·R_B by the measurement h^GPS with variance R_GPS. With ``adaptive`` false the
 estimator is the paper's non-adaptive filter (S ≡ 1).
 
@@ -39,7 +39,7 @@ Deviations from the paper:
   inside it (204 m with the fault flight's noises) becomes the reference and the innovations
   the bias test averages (estimators/base.py) are jumps again, zero-mean. With
   ``fault_detection`` Δ̄ is the Kalman estimate of Δ's mean, modelled as the random walk of
-  PSD ``drift_psd`` that the baro drift is (seed 002: about 1 m/s, a walk of 1 m²/s at its
+  PSD ``drift_psd`` that the baro drift is (hajiyev: about 1 m/s, a walk of 1 m²/s at its
   1 s samples, error_models.HAJIYEV_DRIFT_RATE) measured with variance R_B + R_GPS. Its
   innovations are white with exactly the variance passed, as the bias test assumes; its
   steady-state gain is about √(drift_psd·T/(R_B + R_GPS)) at a GPS period T (0.06 at seed
@@ -50,7 +50,7 @@ Deviations from the paper:
   baro may have drifted 10 m in the model, 100 m at the paper's 1 m/s), the first returning
   samples take 8 % of their innovation each, and 50 m is at most 50/√(P̄ + R/25) = 3.9
   standard deviations over the bias test's 2.5 s even against a frozen reference: not a
-  fault that the residual between baro and GPS can tell from drift at seed 002's rate. Told
+  fault that the residual between baro and GPS can tell from drift at hajiyev's rate. Told
   a flight's slower drift (the fault flight's 0.05 m²/s, ``systems.faults.BARO_BIAS_PSD``),
   P̄ grows by 5 m² and the returning GNSS is isolated 3 s after it is back;
 * a GPS sample rejected while the GPS is isolated (with ``fault_detection``) sets the
@@ -72,8 +72,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from altfusion.estimators.base import BARO, GPS, Estimator, HealthParams, Stream
+from altfusion.estimators.base import Estimator, HealthParams, Verdict
 from altfusion.estimators.kalman import update
+from altfusion.estimators.streams import BARO, GPS, Stream
 from altfusion.params import param
 
 H = np.array([[1.0]])
@@ -81,9 +82,9 @@ H = np.array([[1.0]])
 
 @dataclass(frozen=True)
 class HajiyevParams(HealthParams):
-    R_baro: float = param(81.0, "m2", "Baro altitude noise variance R_B (seed 002: 9² m²)",
+    R_baro: float = param(81.0, "m2", "Baro altitude noise variance R_B (hajiyev: 9² m²)",
                           positive=True)
-    R_gps: float = param(169.0, "m2", "GPS altitude noise variance R_GPS (seed 002: 13² m²)",
+    R_gps: float = param(169.0, "m2", "GPS altitude noise variance R_GPS (hajiyev: 13² m²)",
                          positive=True)
     adaptive: bool = param(True, None, "Adaptive gain correction (eqs. 26-31); false: eqs. 15-19")
     gate_sigma: float = param(
@@ -95,12 +96,12 @@ class HajiyevParams(HealthParams):
     drift_psd: float = param(
         1.0, "m2/s", "Growth rate of the estimate's variance while no GPS sample arrives "
         "(the baro error the held correction no longer tracks), and with fault_detection the "
-        "PSD of the random walk the residual reference follows (seed 002's drift of about "
+        "PSD of the random walk the residual reference follows (hajiyev's drift of about "
         "1 m/s at 1 s samples); not in the paper", min=0.0)
 
 
 class HajiyevAdaptiveEstimator(Estimator):
-    """Baro/GPS maximum-likelihood fusion with the adaptive factor S(k) of seed 002."""
+    """Baro/GPS maximum-likelihood fusion with the adaptive factor S(k) of hajiyev."""
 
     Params = HajiyevParams
     streams = (BARO, GPS)
@@ -160,11 +161,12 @@ class HajiyevAdaptiveEstimator(Estimator):
         p = self.params
         if not self.started:
             self.started = True
-            self.accept("baro")
+            self.accept(self.aid["baro"])
         else:
             elapsed, self._baro_time = stamp - self._baro_time, stamp
-            if not self.gate("baro", h_baro - self.baro, self.jump_variance(p.R_baro, elapsed),
-                             p.gate_sigma):
+            verdict = self.gate(self.aid["baro"], h_baro - self.baro,
+                                self.jump_variance(p.R_baro, elapsed), p.gate_sigma)
+            if verdict is not Verdict.FUSED:
                 return
         self._baro_time = stamp
         self.baro = h_baro
@@ -189,7 +191,9 @@ class HajiyevAdaptiveEstimator(Estimator):
             prior = self._reference_variance
             if p.fault_detection:
                 prior += p.drift_psd * (self.time - self._reference_time)
-            if not self.gate("gps", residual - self._reference, prior + noise, p.gate_sigma):
+            verdict = self.gate(self.aid["gps"], residual - self._reference, prior + noise,
+                                p.gate_sigma)
+            if verdict is not Verdict.FUSED:
                 self._fall_back(prior)
                 return False
             if p.fault_detection:
@@ -205,7 +209,7 @@ class HajiyevAdaptiveEstimator(Estimator):
         falls back to h_B plus the reference Δ̄ (the GPS-minus-baro offset learnt from the
         accepted residuals), variance R_B + ``prior`` (P̄ now). A rejected outlier leaves the
         held correction, as if the sample had not arrived."""
-        if not self.isolated("gps"):
+        if not self.aid["gps"].isolated:
             return
         self.correction = self._reference
         self.variance = self.params.R_baro + prior

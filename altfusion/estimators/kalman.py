@@ -63,7 +63,7 @@ def update(x: np.ndarray, P: np.ndarray, z: np.ndarray | float, H: np.ndarray,
         x = x⁻ + K y
         P = (I - K H) P⁻ (I - K H)ᵀ + K R Kᵀ
 
-    ``gain_scale`` (a weight α ≤ 1 on the gain, seed 004 eq. 26) keeps the Joseph form exact
+    ``gain_scale`` (a weight α ≤ 1 on the gain, xu2016 eq. 26) keeps the Joseph form exact
     for the gain actually used.
     """
     z = np.asarray(z, dtype=float).reshape(-1)
@@ -128,7 +128,8 @@ def predict_constant_acceleration(x: Vector, P: Matrix, dt: float, Q: Matrix,
     of P only gains their block of Q, and their covariances with the first three move by F₃.
     With such states Q is given over all of them (n x n).
 
-    P and Q must be symmetric; P⁻ is, exactly (its upper triangle is mirrored)."""
+    P and Q must be symmetric; P⁻ is, exactly (its upper triangle is mirrored, and the
+    constant states' block P + Q is the same float on either side of the diagonal)."""
     h, v, a = x[:3]
     (p00, p01, p02), (_, p11, p12), (_, _, p22) = (row[:3] for row in P[:3])
     half = dt * dt / 2.0
@@ -147,17 +148,13 @@ def predict_constant_acceleration(x: Vector, P: Matrix, dt: float, Q: Matrix,
     if len(x) == 3:
         return x_new, ((m00, m01, m02), (m01, m11, m12), (m02, m12, m22))
     extra = range(3, len(x))
-    cross = [(P[0][k] + dt * P[1][k] + half * P[2][k] + Q[0][k],     # rows of F₃ times the
-              P[1][k] + dt * P[2][k] + Q[1][k],                      # constant states'
-              P[2][k] + Q[2][k]) for k in extra]                     # columns
-    rows = [[m00, m01, m02], [m01, m11, m12], [m02, m12, m22]]
-    for i in range(3):
-        rows[i].extend(column[i] for column in cross)
-    for k in extra:
-        rows.append([*cross[k - 3], *(P[k][j] + Q[k][j] for j in extra)])
-    for k in extra:                                     # mirror the constant states' block
-        for j in range(3, k):
-            rows[k][j] = rows[j][k]
+    P0, P1, P2 = P[0], P[1], P[2]
+    c0 = [P0[k] + dt * P1[k] + half * P2[k] + Q[0][k] for k in extra]   # rows of F₃ times
+    c1 = [P1[k] + dt * P2[k] + Q[1][k] for k in extra]                  # the constant
+    c2 = [P2[k] + Q[2][k] for k in extra]                               # states' columns
+    rows = [[m00, m01, m02, *c0], [m01, m11, m12, *c1], [m02, m12, m22, *c2]]
+    rows += [[c0[i], c1[i], c2[i], *[P[k][j] + Q[k][j] for j in extra]]
+             for i, k in enumerate(extra)]
     return (*x_new, *x[3:]), rows
 
 
@@ -224,7 +221,7 @@ def update_state_component(x: Vector, P: Matrix, index: int, z: float, variance:
 def quadratic_form(P: Matrix, H: Sequence[tuple[int, float]]) -> float:
     """H P Hᵀ for a sparse row H ((state index, coefficient) pairs): the variance of the
     measured combination of states, the innovation variance without R."""
-    return sum(c * sum(c2 * P[i][j] for j, c2 in H) for i, c in H)
+    return sparse_dot({i: sparse_dot(P[i], H) for i, _ in H}, H)
 
 
 def update_scalar(x: Vector, P: Matrix, H: Sequence[tuple[int, float]], innovation: float,
@@ -238,11 +235,38 @@ def update_scalar(x: Vector, P: Matrix, H: Sequence[tuple[int, float]], innovati
         P = P⁻ - (K rᵀ + r Kᵀ) + S K Kᵀ            (Joseph form, as update_state_component)
 
     P stays exactly symmetric (each entry's sum is the same float for (a, b) and (b, a))."""
-    row = [sum(h * P_a[i] for i, h in H) for P_a in P]
-    S = sum(h * row[i] for i, h in H) + variance
+    row = _times_row(P, H)
+    S = sparse_dot(row, H) + variance
     K = [r / S for r in row]
     x_new = [xa + ka * innovation for xa, ka in zip(x, K, strict=True)]
-    P_new = [[p_ab - (k_a * r_b + r_a * k_b) + k_a * k_b * S
-              for p_ab, r_b, k_b in zip(P_a, row, K, strict=True)]
-             for P_a, r_a, k_a in zip(P, row, K, strict=True)]
+    P_new = [[p_ab - (k_a * r_b + r_a * k_b) + k_a * k_b * S          # equal lengths by
+              for p_ab, r_b, k_b in zip(P_a, row, K, strict=False)]   # construction: zip's
+             for P_a, r_a, k_a in zip(P, row, K, strict=False)]       # check costs 20 %
     return x_new, P_new, S
+
+
+def _times_row(P: Matrix, H: Sequence[tuple[int, float]]) -> list[float]:
+    """P Hᵀ for a sparse row H: each entry the sum of H's terms from 0 in H's order (the
+    float :func:`sum` gives), written out for rows of up to four terms."""
+    if len(H) == 1:
+        (i, h), = H
+        return [0.0 + h * P_a[i] for P_a in P]
+    if len(H) == 2:
+        (i, h), (j, g) = H
+        return [0.0 + h * P_a[i] + g * P_a[j] for P_a in P]
+    if len(H) == 3:
+        (i, h), (j, g), (k, f) = H
+        return [0.0 + h * P_a[i] + g * P_a[j] + f * P_a[k] for P_a in P]
+    if len(H) == 4:
+        (i, h), (j, g), (k, f), (m, e) = H
+        return [0.0 + h * P_a[i] + g * P_a[j] + f * P_a[k] + e * P_a[m] for P_a in P]
+    return [sum(h * P_a[i] for i, h in H) for P_a in P]
+
+
+def sparse_dot(v: Vector, H: Sequence[tuple[int, float]]) -> float:
+    """H v for a sparse row H ((state index, coefficient) pairs), summed from 0 in H's order
+    (the float :func:`sum` gives; :func:`_times_row` sums the same way)."""
+    total = 0.0
+    for i, h in H:
+        total += h * v[i]
+    return total

@@ -1,4 +1,4 @@
-"""WhangGAEstimator: baro-error estimation by a Gaussian-approximation filter (seed 000).
+"""WhangGAEstimator: baro-error estimation by a Gaussian-approximation filter (whang2008).
 
 Fig. 1 of the paper, block by block:
 
@@ -7,7 +7,7 @@ Fig. 1 of the paper, block by block:
   - system propagation, random walks (eqs. 11-12, 17-18), Q_a and Q_b per air-data step;
   - λ-update at the air-data rate with the temperature pseudo-measurement (eqs. 6-7, 19-22),
     λ = s·(T_ADM - Γ̂ (ĥ_{k|k-1} - H0) - T0)/T0, Var = (Var T + Γ̂² Var ĥ + (ĥ - H0)² Var Γ)/T0²
-    (T0² as corrected in NOTES.md);
+    (T0² as corrected in docs/papers.md);
   - z-update at the GPS rate with z = h^B - h^GPS (eqs. 23-31), using h^GPS - H0 where the
     paper, taking H0 ≈ 0, writes h^GPS;
 * baro-error compensation: h^c = H0 + (h^B - H0 - b̂)/(1 + â) (eq. 32) filtered by the
@@ -19,44 +19,37 @@ noises, given per air-data step Δt^B, are scaled by dt/Δt^B); with the estimat
 
 Deviations from the paper:
 
-* Sign of λ (seeds NOTES.md): a warmer day than the calibration makes the barometer read low,
+* Sign of λ (docs/papers.md): a warmer day than the calibration makes the barometer read low,
   h^B - H0 ≈ (1 - ΔT/T0)(h - H0), so a ≈ -ΔT/T0, opposite to eq. (3). ``paper_lambda_sign``
   false (default) takes the physical sign s = -1; true restores eq. (6), s = +1.
 * GPS gate: a z-update whose innovation exceeds ``gate_sigma`` standard deviations
   √(P^b + R + (h^GPS - H0)² P^a) is rejected.
-* Baro gate (with ``fault_detection``; without it the baro is ungated, as in the paper): the
-  compensated height h^c (eq. 32, with the calibration â, b̂ before this step's z-update)
-  against the alpha-beta prediction ĥ_{k|k-1} of eq. (33), S = P^h_{k|k-1} + R_h (R_h of eq.
-  34, P^h that of ``h_std`` below), at ``gate_sigma``. The filter starts on the first h^c,
-  so its error variance starts at that sample's R_h, which holds the calibration's prior
-  P^b_00: a replayed PX4 log's baro, 155 m off the GPS datum, moves h^c by 155 m as the
-  first GPS samples calibrate b̂, within the gate (with the paper's P0_h, 10² m², as the
-  start variance every such sample was rejected). While the baro is rejected, z = h^B -
-  h^GPS (eq. 23) has no valid h^B: the GPS height is fused into the alpha-beta filter
-  instead (eq. 34 with R^GPS), so the GPS aids the height and the shared isolation logic
-  (estimators/base.py) can isolate the baro; an isolated baro whose innovations keep one
-  sign is re-admitted with b̂ moved onto it (``reset_offset``: b̂ += (1 + â)·(h^c -
-  ĥ_{k|k-1})), a height reset moves ĥ. The paper's Q_b (400 m² per air-data step: seed 000's
-  weather) widens R_h so fast that a 200 m baro step passes the gate after 0.15 s and is
-  absorbed by b̂ (seed 000 reproduction unchanged: its run 0 reference matches); with a
-  flight's true, small bias walk (the fault flight: ``systems.faults.TRUE_NOISE``) a failed
-  baro is isolated 2.5 s after it steps and re-admitted on its new bias 2.5 s later.
 * ``MIN_LEVER``: below 1 m of h^GPS - H0 the scale-factor update of eqs. (23)-(26) is skipped
   (z_a = (z - b̂)/(h^GPS - H0) would divide by a vanishing lever); the bias update runs.
 * GPS samples that arrive before the first air-data sample are not fused (z needs h^B; in a
   replayed log GPS may come first).
 * Health (estimators/base.py): the GPS calibrates the baro and does not aid the height,
-  except while the baro is rejected (the baro gate above).
-* h_std (with ``fault_detection``; the estimate is the paper's either way): eq. (34) fuses
-  R_h = R^B' + C as white noise, C = ((h^c - H0)² P^a + P^b)/(1 + â)² the variance of the
-  calibration â, b̂; but â and b̂ change at GPS samples only, so the N air-data samples
-  between two GPS samples (N = GPS interval / air-data interval, from the time stamps)
-  share one calibration error, which the filter averages down as if independent: h_std was
-  overconfident (coverage of |e| <= 2 h_std 0.80 in seed 000's scenario). ``h_std`` is the
-  error covariance of the filter's own gain K under the equivalent white noise of that
-  shared error, R^B' + N·C (``kalman.joseph``), from the first sample's R_h (the start
-  above): coverage 0.99 in seed 000's scenario (N = 5), 0.98 on the fault suite's flight
-  (N = 2).
+  except while the baro is rejected (the fault layer's baro gate below).
+
+The fault layer (``fault_detection`` true; the estimate is the paper's without it), not in
+the paper; ``docs/estimators.md`` gives the cases behind it:
+
+* baro gate: the compensated height h^c (eq. 32, with the calibration â, b̂ before this
+  step's z-update) against the alpha-beta prediction ĥ_{k|k-1} of eq. (33),
+  S = P^h_{k|k-1} + R_h (R_h of eq. 34, P^h that of ``h_std`` below), at ``gate_sigma``. The
+  filter's error variance starts at the first sample's R_h, which holds the calibration's
+  prior P^b_00. While the baro is rejected, z = h^B - h^GPS (eq. 23) has no valid h^B: the
+  GPS height is fused into the alpha-beta filter instead (eq. 34 with R^GPS), so the GPS aids
+  the height and the shared isolation (:mod:`~altfusion.estimators.fault_detection`) can
+  isolate the baro; an isolated baro whose innovations keep one sign is re-admitted with b̂
+  moved onto it (``reset_offset``: b̂ += (1 + â)·(h^c - ĥ_{k|k-1})), a height reset moves ĥ;
+* ``h_std``: eq. (34) fuses R_h = R^B' + C as white noise, C = ((h^c - H0)² P^a + P^b)/(1 + â)²
+  the variance of the calibration â, b̂; but â and b̂ change at GPS samples only, so the N
+  air-data samples between two GPS samples (N = GPS interval / air-data interval, from the
+  time stamps) share one calibration error, which the filter would average down as if
+  independent. ``h_std`` is the error covariance of the filter's own gain K under the
+  equivalent white noise of that shared error, R^B' + N·C (``kalman.joseph``), from the first
+  sample's R_h.
 """
 
 from dataclasses import dataclass
@@ -64,8 +57,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from altfusion.constants import ISA_LAPSE_RATE, ISA_T0
-from altfusion.estimators.base import BARO_T, GPS, Estimator, HealthParams
+from altfusion.estimators.base import Estimator, HealthParams, Verdict
 from altfusion.estimators.kalman import decorrelate, joseph, predict, shift_state, update
+from altfusion.estimators.streams import BARO_T, GPS
 from altfusion.params import param
 
 ONE = np.array([[1.0]])
@@ -80,12 +74,12 @@ class WhangParams(HealthParams):
     H0: float = param(0.0, "m", "Launch height of the baro calibration")
     T0: float = param(ISA_T0, "K", "Launch temperature of the baro calibration")
     lapse_rate: float = param(ISA_LAPSE_RATE, "K/m", "Nominal lapse rate Γ̂")
-    lapse_rate_var: float = param(0.003**2, "K2/m2", "Var{Γ̂} (seed 000: (0.003 K/m)²)",
+    lapse_rate_var: float = param(0.003**2, "K2/m2", "Var{Γ̂} (whang2008: (0.003 K/m)²)",
                                   min=0.0)
-    R_temperature: float = param(1.5**2, "K2", "Var{T_ADM} (seed 000: 1.5² K²)", min=0.0)
-    R_baro: float = param(5.0**2, "m2", "R^B, baro-height noise variance (seed 000: 5² m²)",
+    R_temperature: float = param(1.5**2, "K2", "Var{T_ADM} (whang2008: 1.5² K²)", min=0.0)
+    R_baro: float = param(5.0**2, "m2", "R^B, baro-height noise variance (whang2008: 5² m²)",
                           positive=True)
-    R_gps: float = param(70.0**2, "m2", "R^GPS (seed 000: 70² m²)", positive=True)
+    R_gps: float = param(70.0**2, "m2", "R^GPS (whang2008: 70² m²)", positive=True)
     Q_a: float = param(2e-5, "1", "Scale-factor random-walk variance per air-data step",
                        min=0.0)
     Q_b: float = param(400.0, "m2", "Bias random-walk variance per air-data step", min=0.0)
@@ -99,14 +93,14 @@ class WhangParams(HealthParams):
     adm_period: float = param(0.2, "s", "Air-data period Δt^B the noises are given for",
                               positive=True)
     paper_lambda_sign: bool = param(False, None, "λ with the sign of eq. (6) instead of "
-                                                 "the physical sign (see NOTES.md)")
+                                                 "the physical sign (see docs/papers.md)")
     gate_sigma: float = param(5.0, "1", "Innovation gate on GPS (z-update) and, with "
                                         "fault_detection, on the baro, in standard "
                                         "deviations (0: off); not in the paper", min=0.0)
 
 
 class WhangGAEstimator(Estimator):
-    """Whang & Ra's GA baro-error estimation and compensation filter (seed 000, Fig. 1)."""
+    """Whang & Ra's GA baro-error estimation and compensation filter (whang2008, Fig. 1)."""
 
     Params = WhangParams
     streams = (BARO_T, GPS)
@@ -176,18 +170,18 @@ class WhangGAEstimator(Estimator):
         paper); with it, its compensated height (eq. 32, the calibration before this
         step's z-update) against the alpha-beta prediction, S = P⁻_hh + R_h (eq. 34)."""
         if not (self.params.fault_detection and self.started):
-            self.accept("baro")
+            self.accept(self.aid["baro"])
             return True
         h_comp, R_h = self._compensated(h_baro)
-        return self.gate("baro", h_comp - self.h_prior, self.P_error[0, 0] + R_h,
-                         self.params.gate_sigma)
+        return self.gate(self.aid["baro"], h_comp - self.h_prior, self.P_error[0, 0] + R_h,
+                         self.params.gate_sigma) is Verdict.FUSED
 
     def _gps_height_update(self, h_gps: float) -> None:
         """The GPS height fused into the alpha-beta filter (eq. 34 with R^GPS) while the baro
         is rejected (``fault_detection`` only): z = h^B - h^GPS has no valid h^B then."""
         R = self.params.R_gps
-        if self.gate("gps", h_gps - self.h_prior, self.P_error[0, 0] + R,
-                     self.params.gate_sigma):
+        if self.gate(self.aid["gps"], h_gps - self.h_prior, self.P_error[0, 0] + R,
+                     self.params.gate_sigma) is Verdict.FUSED:
             self._alpha_beta_update(h_gps, R, R)
 
     def _lambda_update(self, temperature: float) -> None:
@@ -209,8 +203,8 @@ class WhangGAEstimator(Estimator):
         z = self.baro - h_gps
         lever = h_gps - p.H0
         innovation = z - lever * self.a - self.b
-        if not self.gate("gps", innovation, self.P_b + R + lever**2 * self.P_a, p.gate_sigma,
-                         aids_height=False):
+        if self.gate(self.aid["gps"], innovation, self.P_b + R + lever**2 * self.P_a, p.gate_sigma,
+                         aids_height=False) is not Verdict.FUSED:
             return
         if abs(lever) >= MIN_LEVER:
             z_a = (z - self.b) / lever                                          # (23)

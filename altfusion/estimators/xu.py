@@ -1,4 +1,4 @@
-"""XuSHAEKF: the improved Sage-Husa adaptive Kalman filter of Xu et al. (seed 004, Fig. 7).
+"""XuSHAEKF: the improved Sage-Husa adaptive Kalman filter of Xu et al. (xu2016, Fig. 7).
 
 State and model (Section 2.1): x = [h, vz, b_a, ε_b], altitude, vertical speed, accelerometer
 bias and the barometer's constant error ε_b of eqs. (4), (14). The accelerometer ``acc_z`` is
@@ -36,10 +36,10 @@ same model and gate with the nominal R and Q, α = 1 and no strong tracking.
 Deviations from the paper (the reasons in docs/estimators.md):
 
 * eq. (19) carries the input term B·u the paper dropped; the accelerometer is the input, not
-  the double-integrated "MEMS" measurement row of eq. (14) (seeds NOTES.md);
+  the double-integrated "MEMS" measurement row of eq. (14) (docs/papers.md);
 * states b_a (random walk ``acc_bias_psd``) and a random walk ``baro_bias_psd`` on ε_b;
 * α_C averages each innovation normalised by its own C; α = min(1, (c/α_C)²) is the bounded
-  mapping of eq. (18) (seeds NOTES.md), with α = 1 for α_C ≤ c (no division by α_C = 0);
+  mapping of eq. (18) (docs/papers.md), with α = 1 for α_C ≤ c (no division by α_C = 0);
 * K_{k-1}, P_{k-1} of eq. (22) are read as this sample's gain and posterior with R̂_{k-1};
 * γ = 16 (not given in the paper); strong tracking scales h, vz and b_a, and ε_b only on a
   baro sample, at most ``MAX_FADING`` per step;
@@ -49,12 +49,11 @@ Deviations from the paper (the reasons in docs/estimators.md):
 * health (estimators/base.py): a height source rejected for ``reset_timeout`` while another
   agrees is isolated; with no source fused for that long the height resets; an isolated
   barometer with a constant offset is re-admitted with ε_b reset onto it (:meth:`reset_offset`;
-  a baro stepped by 200 m above the laser's range: 5.4 m RMS on the 30 m GNSS alone, 1.0 m
-  re-admitted, on the fault suite's flight).
+  docs/estimators.md).
 
 Scenarios (Section 3): profiles ``xu_hover15``, ``xu_hover35`` and ``xu_multipoint`` (bounds of
 Section 3.2: error ≤ 1 m below 25 m, ≤ 1.2 m above, 1.1 / 1.5 m with wind grade 3); realistic
-sensors since the paper gives none (seeds NOTES.md): laser 100 Hz ±5 mm 0.1-25 m, MEMS baro
+sensors since the paper gives none (docs/papers.md): laser 100 Hz ±5 mm 0.1-25 m, MEMS baro
 0.5 m, GNSS 5 Hz a few metres, accelerometer 100 Hz 0.05 m/s² with a bias of a few 0.01 m/s².
 """
 
@@ -64,8 +63,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from altfusion.estimators.base import ACC, BARO, GPS, LASER, Estimator, HealthParams, Stream
+from altfusion.estimators.base import Estimator, HealthParams, Verdict
 from altfusion.estimators.kalman import predict, shift_state, update
+from altfusion.estimators.streams import ACC, BARO, GPS, LASER, Stream
 from altfusion.params import param
 
 BARO_SOURCE, LASER_SOURCE = 0, 1
@@ -82,7 +82,7 @@ MAX_FADING = 1000.0
 @dataclass(frozen=True)
 class XuParams(HealthParams):
     R_gps: float = param(9.0, "m2", "Nominal GPS height variance R (3 m: a few metres, "
-                                    "NOTES.md)", positive=True)
+                                    "docs/papers.md)", positive=True)
     R_baro: float = param(0.25, "m2", "Nominal baro height variance (MEMS baro: 0.5 m)",
                           positive=True)
     R_laser: float = param(2.5e-5, "m2", "Nominal laser variance (Section 1.2.4: ±5 mm)",
@@ -160,7 +160,7 @@ class Channel:
 
 
 class XuSHAEKF(Estimator):
-    """Xu et al.'s improved Sage-Husa adaptive Kalman filter (seed 004): accelerometer-driven
+    """Xu et al.'s improved Sage-Husa adaptive Kalman filter (xu2016): accelerometer-driven
     height with laser/baro switching, GPS, adaptive noise, sensor weights and strong tracking."""
 
     Params = XuParams
@@ -210,7 +210,7 @@ class XuSHAEKF(Estimator):
     def fuse_samples(self, samples: dict[Stream, dict[str, float]]) -> None:
         p = self.params
         if ACC in samples:
-            self.accept("acc")
+            self.accept(self.aid["acc"])
             self._accelerometer(samples[ACC]["acc_z"])
         if LASER in samples:
             self._last_laser_time = self.time
@@ -249,7 +249,7 @@ class XuSHAEKF(Estimator):
         channel = self.channels[name]
         if not self.started:
             self._start(z, H, channel.R_hat)
-            self.accept(name)
+            self.accept(self.aid[name])
             return
         innovation = z - float((H @ self.x)[0])                                 # (20)
         hph = float((H @ self.P @ H.T)[0, 0])
@@ -258,14 +258,14 @@ class XuSHAEKF(Estimator):
             channel.weight = 1.0 if ratio <= p.weight_c else (p.weight_c / ratio) ** 2
         C = hph + channel.R_hat
         active = name != "gps"
-        if not self.gate(name, innovation, C, p.gate_sigma):
+        if self.gate(self.aid[name], innovation, C, p.gate_sigma) is not Verdict.FUSED:
             channel.rejections += 1
             if not (active and channel.rejections > p.max_rejections
-                    and not self.contradicted(name, innovation)):
+                    and not self.contradicted(self.aid[name], innovation)):
                 return
             self.note(f"{name}: re-acquired after {p.max_rejections} consecutive rejections "
                       f"(innovation {innovation:.4g} m)")
-            self.accept(name)
+            self.accept(self.aid[name])
             channel.window.clear()
             channel.weight = 1.0
         channel.rejections = 0
@@ -285,7 +285,7 @@ class XuSHAEKF(Estimator):
         P⁻ positive definite). The baro's slow error ε_b is not inflated, even on a baro
         sample: in a steady hover H P⁻ Hᵀ is tiny and λ reaches hundreds, and an inflated ε_b
         let the baro sample fix only the sum h + ε_b, so that the next GPS sample moved h by
-        nearly its own error (6-7 m spikes above 25 m in the seed 004 reproduction)."""
+        nearly its own error (6-7 m spikes above 25 m in the xu2016 reproduction)."""
         factor = min(MAX_FADING, max(1.0, (innovation_sq - R) / max(hph, MIN_VARIANCE)))
         root = np.where(MOTION_STATES, math.sqrt(factor), 1.0)
         self.P = self.P * np.outer(root, root)

@@ -1,11 +1,11 @@
 """YangFusionKF: optimal weighted fusion of GPS, baro and radio-altimeter heights, then a
-Kalman filter on height, vertical speed and acceleration (seed 003, Fig. 1).
+Kalman filter on height, vertical speed and acceleration (yang2020, Fig. 1).
 
 Section 3.1, space-time unification of the heights:
 
 * time (3.1.1): each height sensor's samples are brought to the time t_b of the benchmark
-  sample by eq. (5) as corrected in NOTES.md, a linear extrapolation through its last two
-  samples (t_c < t_a) read from their ``<prefix>_time`` stamps:
+  sample by eq. (5) as corrected in docs/papers.md (reading notes), a linear extrapolation
+  through its last two samples (t_c < t_a) read from their ``<prefix>_time`` stamps:
   Q_tb = Q_ta + (t_b - t_a)(Q_ta - Q_tc)/(t_a - t_c)  (Q_ta alone after a sensor's first sample).
   The benchmark is the sensor with the largest sampling period (radio altimeter 200 ms, GPS
   100 ms, baro 10 ms in Section 4.2): a fusion happens at each new sample of the first *live*
@@ -13,133 +13,102 @@ Section 3.1, space-time unification of the heights:
   ``max_sample_age`` old. So the fusion falls back to GPS and baro when the radar is out of
   range, and to the baro alone when GPS is out as well.
 * space (3.1.2), eq. (6): the radio altimeter measures above the terrain, so its height is
-  Q_real = Q + Q_sealevel with Q_sealevel the parameter ``terrain_h`` (seed 003 flies over
+  Q_real = Q + Q_sealevel with Q_sealevel the parameter ``terrain_h`` (yang2020 flies over
   terrain at sea level: 0).
 
 Section 3.2, optimal weighted fusion (eqs. 7-8) of the live sensors at t_b:
 y = Σ ω_i x_i with ω_i = [σ_i² Σ_j 1/σ_j²]⁻¹, whose variance σ_y² = [Σ_j 1/σ_j²]⁻¹ is the
 smallest (8.57 m for 30 / 20 / 10 m). The σ_i are the parameters R_gps, R_baro, R_radar.
 
-Section 3.3, Kalman filter (eqs. 9-14) on Ω = [y, v, a] (and three bias states, below):
-A of eq. (9) for each step of the estimator, and at each step the rows of Ψ = H·Ω + δ (H = I)
-for which a sample arrived: the fused height (σ_y²), the GPS vertical speed (σ_v²) and the IMU
-acceleration (σ_a²): eqs. 12-14 in Joseph form, the independent rows applied one after the
-other (the joint update, for a diagonal R), in the shared machinery's scalar arithmetic (a
-small filter stepped at 100 Hz, where numpy's per-call overhead would dominate). The filter
-starts at the first fusion with h = y, Var h = σ_y².
+Section 3.3, Kalman filter (eqs. 9-14) on Ω = [y, v, a]: A of eq. (9) for each step of the
+estimator, and at each step the rows of Ψ = H·Ω + δ (H = I) for which a sample arrived: the
+fused height (σ_y²), the GPS vertical speed (σ_v²) and the IMU acceleration (σ_a²): eqs.
+12-14 in Joseph form, the independent rows applied one after the other (the joint update, for
+a diagonal R), in the shared machinery's scalar arithmetic. The filter starts at the first
+fusion with h = y, Var h = σ_y². With ``fault_detection`` false this is the estimator
+(:meth:`YangFusionKF._kalman_update`), with the deviations below.
 
 Deviations from the paper:
 
-* process noise: the paper's filter has none (eq. 11); taken literally it cannot follow the
-  trajectory's acceleration steps (seeds NOTES.md), so eq. (11) gets a white-jerk process
-  noise of spectral density ``jerk_psd``, Q = q·∫ φφᵀ with φ = [t²/2, t, 1];
-* gates: a height sample whose difference from the predicted height exceeds ``gate_sigma``
-  standard deviations √(P_hh + σ_i²) is rejected before it enters the fusion, and so is a GPS
-  vertical speed against √(P_vv + σ_v²) (rejected for ``reset_timeout``, the speed resets onto
-  the GPS; gate and reset only with ``fault_detection``); the acceleration gets the base's
-  plausibility bound only (acceleration steps are real), which drops clipped readings
-  (beyond 95 % of 16 g: a ±16 g clipping episode fused as accelerations threw the height
-  3 m off);
-* accelerometer bias (with ``fault_detection``; seed 003 has none): eq. (12)'s row for the
-  IMU measures a + b, b a fourth state, constant up to a random walk of spectral density
-  ``acc_bias_psd``, starting at 0 with variance ``P0_acc_bias`` (PX4 EKF2's EKF2_ACC_B_NOISE
-  and EKF2_ABIAS_INIT). Without it the acceleration row (σ_a = 0.01 m/s²) pins the speed and
-  the height to a biased accelerometer: 0.1-0.4 m/s² drifted the height about 30 m with h_std
-  0.55 m on the fault suite's flight (``acc_bias``), and every height sample then fell outside
-  the gate. The GPS vertical speed makes b observable (v̇ = a = z_acc - b): the bias is learnt
-  and the height stays within its h_std (0.42 m RMS, coverage 96 %). With
-  ``fault_detection`` false the state has zero variance and no process noise: the filter is
-  the paper's, bit for bit;
-* baro offset (with ``fault_detection``; seed 003's barometer has none): a fifth state d,
-  the barometer's offset, a random walk of spectral density ``baro_bias_psd`` (PX4 EKF2's
-  baro_bias_nsd, 0.13 m/s/√Hz) from 0 with variance ``P0_baro_bias`` (0: calibrated at the
-  start, as in seed 003). Eqs. (7)-(8) fuse the heights as independent white errors; a
-  drifting barometer (warm-up, weather) moved the fused height by its weight 9/49 and the
-  filter, which averages y down to 0.2 m, followed it (fault suite ``baro_drift``: 1.26 m
-  RMS against 0.18 m nominal, coverage 0.54). With the offset state the time-unified
-  heights of a fusion (eq. 5) are fused one by one, the baro as h + d (H = [1, 0, 0, 0, 1]):
-  with d known (zero variance) this is the update with y and σ_y² (the information of
-  independent measurements adds up), so y and its weights stay the diagnostics of eqs.
-  (7)-(8); d is learnt from the baro's disagreement with GPS and radar (``baro_drift``:
-  0.28 m RMS). The baro gate is on z - h - d against P_hh + 2 P_hd + P_dd + σ_ba²;
-* GPS offset (with ``fault_detection`` and ``gps_bias_psd`` > 0; off by default, the GPS
-  then an absolute height as in the paper): a sixth state g, the GPS height's offset, a
-  random walk of spectral density ``gps_bias_psd`` from 0 (known: the GPS unbiased at the
-  start), the GPS fused as h + g and gated and re-admitted like the baro. Over terrain known
-  exactly the radio altimeter is an absolute height without a bias; a GPS off by 10 m, a
-  third of one sample's 30 m noise, entered the height with its weight against the radar
-  (fault suite ``all_fail``: 0.82 m RMS against 3x nominal 0.76 m); with g it is taken up
-  (0.46 m). Without a radar (or over unknown terrain) leave it off: baro and GPS would both
-  be relative and the height would drift as their offsets' random walks;
-* GNSS delay (``gps_delay``, AltitudeEKF's parameter; 0 by default, the paper's fusion at
-  the estimator's clock): the GPS vertical speed is fused against the speed taken back to
-  its instant s = gps_time - gps_delay along eq. (9)'s model, v(s) = v - δ·a with
-  δ = now - s. Under a Jacobi-type master (libcosim, ECOS) a sensor samples the plant one of
-  its steps before its stamp: at the closed-loop take-off of ``fault_demo_yang``
-  (±10-16 m/s²) the GPS speed was then up to 1.6 m/s off against its σ of 0.2 m/s, its gate
-  rejected it and the speeds that passed drove the accelerometer-bias state wrong (ECOS:
-  9.96 m RMS over the first 120 s; 1.62 m with ``gps_delay`` the GNSS's 0.1 s step). The
-  heights keep eq. (5) at their stamps: a delay moves one by v·δ (1 m at 10 m/s and 0.1 s)
-  against its 10-30 m noise, and unifying a delayed GPS height to the benchmark's instant
-  would extrapolate two noisy samples (eq. 5: 1.74 m instead of 1.62 m in that run);
-* health (estimators/base.py): a height source rejected for ``reset_timeout`` while another
-  agrees is isolated (an isolated barometer with a constant offset is re-admitted with d
-  reset onto it, :meth:`reset_offset`); with every height source rejected that long the
-  height resets onto the next sample (the overconfident prediction can no longer lock the
-  measurements out).
+* process noise: eq. (11) has none, and taken literally the filter cannot follow the
+  trajectory's acceleration steps (docs/papers.md, reading notes): a white jerk of spectral
+  density ``jerk_psd``, Q = q·∫ φφᵀ with φ = [t²/2, t, 1];
+* height gates: a height sample further than ``gate_sigma`` standard deviations √(P_hh + σ_i²)
+  from the predicted height does not enter the fusion; the acceleration has the shared
+  plausibility bound only (acceleration steps are real; clipped readings are dropped);
+* GNSS delay (``gps_delay``, 0 by default): the GPS vertical speed is fused against the speed
+  at its instant s = gps_time - gps_delay along eq. (9)'s model, v(s) = v - δ·a, δ = now - s
+  (a Jacobi-type master samples the GNSS one of its steps before its stamp); the heights keep
+  eq. (5) at their stamps.
+
+The fault layer (``fault_detection`` true, :meth:`YangFusionKF._kalman_update_with_offsets`),
+not in the paper; ``docs/estimators.md`` says which fault-suite scenario each part is for:
+
+* the GPS vertical speed gated against √(P_vv + σ_v²); rejected for ``reset_timeout``, the
+  speed resets onto it (PX4's velocity reset);
+* accelerometer bias: the IMU row measures a + b, b a fourth state, a random walk of
+  spectral density ``acc_bias_psd`` from 0 with variance ``P0_acc_bias`` (PX4 EKF2's
+  EKF2_ACC_B_NOISE and EKF2_ABIAS_INIT), observable through the GPS vertical speed;
+* baro offset: a fifth state d, a random walk of spectral density ``baro_bias_psd`` (PX4
+  EKF2's baro_bias_nsd) from 0 with variance ``P0_baro_bias``; the time-unified heights of a
+  fusion (eq. 5) are fused one by one instead of as y, the baro as h + d (H = [1, 0, 0, 0, 1];
+  with d known this is the update with y and σ_y², so y and its weights stay the diagnostics
+  of eqs. 7-8); the baro gate is on z - h - d against P_hh + 2 P_hd + P_dd + σ_ba²;
+* GPS offset (``gps_bias_psd`` > 0; off by default, the GPS then an absolute height as in the
+  paper): a sixth state g from 0 (known), the GPS fused as h + g and gated and re-admitted
+  like the baro. Only where another absolute height exists (a radio altimeter over known
+  terrain): with baro and GPS both relative the height would drift;
+* isolation, height resets and re-referencing (:mod:`~altfusion.estimators.fault_detection`):
+  an isolated baro or GPS with a constant offset is re-admitted with its offset state reset
+  onto it (:meth:`YangFusionKF.reset_offset`); a height reset moves h onto the sample and the
+  other states back to their initial variances.
 
 Scenario of the paper (Section 4): profile ``yang2020`` (climb, cruise at 1440 m, descent over
 420 s, reference altitude sea level); GnssReceiver every 100 ms with σ_h = 30 m
 (``user_range_error`` 20 m at VDOP 1.5) and σ_v = 0.2 m/s; AirDataModule every 10 ms with 20 m
 white noise, no scale-factor error and no drift; RadioAltimeter every 200 ms with 10 m over flat
 terrain at 0 m; Accelerometer with 0.01 m/s² (its rate is not given: 10 ms here); sensor
-clocks aligned (NOTES.md); the estimator stepped every 10 ms; 500 Monte Carlo runs, accuracy
-by eq. (15).
+clocks aligned (docs/papers.md); the estimator stepped every 10 ms; 500 Monte Carlo runs,
+accuracy by eq. (15).
 """
 
 import math
 from collections import deque
 from dataclasses import dataclass
 
-from altfusion.estimators.base import (
-    ACC,
-    BARO,
-    GPS_VZ,
-    MAX_DELAY,
-    RADAR,
-    Estimator,
-    HealthParams,
-)
+from altfusion.estimators.base import MAX_DELAY, Estimator, HealthParams, Verdict
 from altfusion.estimators.kalman import (
     constant_states_noise,
     predict_constant_acceleration,
     quadratic_form,
     reset_state,
+    sparse_dot,
     update_scalar,
     white_jerk_noise,
 )
+from altfusion.estimators.streams import ACC, BARO, GPS_VZ, RADAR
 from altfusion.params import param
 
 HEIGHT_SENSORS = ("radar", "gps", "baro")
 """The height sensors in benchmark order: largest sampling period first (Section 4.2)."""
 
-
-ACC_ROW = ((2, 1.0), (3, 1.0))
-"""H of the IMU acceleration: the acceleration plus the accelerometer bias."""
-
 HEIGHT_ROW = ((0, 1.0),)
 """H of the height itself: the fused height y (eq. 12)."""
 
-HEIGHT_ROWS = {"radar": HEIGHT_ROW, "gps": (*HEIGHT_ROW, (5, 1.0)),
-               "baro": (*HEIGHT_ROW, (4, 1.0))}
-"""H of each height sensor: the height, plus the sensor's offset for the GPS and the baro."""
-
-OFFSET_STATE = {"baro": 4, "gps": 5}
-"""The state of each height sensor's offset."""
+ACC_ROW = ((2, 1.0),)
+"""H of the IMU acceleration (eq. 12)."""
 
 SPEED_ROW = ((1, 1.0),)
-"""H of the GPS vertical speed."""
+"""H of the GPS vertical speed (eq. 12)."""
 
+ACC_BIAS, BARO_OFFSET, GPS_OFFSET = 3, 4, 5
+"""The fault layer's states after Ω = [y, v, a]."""
+
+ACC_BIAS_ROW = ((2, 1.0), (ACC_BIAS, 1.0))
+"""H of the IMU acceleration with the fault layer: the acceleration plus its bias."""
+
+OFFSET_STATE = {"baro": BARO_OFFSET, "gps": GPS_OFFSET}
+"""The state of each height sensor's offset (fault layer)."""
 
 HEIGHT_STREAMS = (("baro", BARO, "baro_h", "baro_time"),
                   ("gps", GPS_VZ, "gps_h", "gps_time"),
@@ -152,11 +121,6 @@ def speed_row(delta: float) -> tuple[tuple[int, float], ...]:
     constant-acceleration model: v(s) = v - δ·a (process noise over δ neglected, as
     AltitudeEKF does)."""
     return SPEED_ROW if delta == 0.0 else ((1, 1.0), (2, -delta))
-
-
-def predicted(x, row) -> float:
-    """H x for a sparse row H ((state index, coefficient) pairs)."""
-    return sum(c * x[i] for i, c in row)
 
 
 def unify_time(history, t_b: float) -> float:
@@ -189,10 +153,10 @@ class YangParams(HealthParams):
     R_acc: float = param(1e-4, "m2/s4", "IMU acceleration variance (Section 4.2: 0.01 m/s²)",
                          positive=True)
     jerk_psd: float = param(0.01, "m2/s5", "Spectral density of the white jerk added to eq. "
-                                           "(11); the paper has no process noise (NOTES.md)",
+                                           "(11); the paper has no process noise (docs/papers.md)",
                             positive=True)
     terrain_h: float = param(0.0, "m", "Q_sealevel of eq. (6): terrain height under the radio "
-                                       "altimeter (seed 003: sea level)")
+                                       "altimeter (yang2020: sea level)")
     max_sample_age: float = param(0.5, "s", "A height sensor takes part in a fusion while its "
                                             "last sample is at most this old", positive=True)
     P0_vz: float = param(100.0, "m2/s2", "Initial vertical-speed variance", positive=True)
@@ -205,7 +169,7 @@ class YangParams(HealthParams):
                                                "random walk (PX4 EKF2_ACC_B_NOISE: 3e-3 "
                                                "m/s³); with fault_detection only", min=0.0)
     P0_baro_bias: float = param(0.0, "m2", "Initial variance of the baro-offset state (0: the "
-                                           "baro calibrated at the start, as in seed 003); "
+                                           "baro calibrated at the start, as in yang2020); "
                                            "with fault_detection only", min=0.0)
     baro_bias_psd: float = param(0.0169, "m2/s", "Spectral density of the baro offset's "
                                                  "random walk (PX4 EKF2 baro_bias_nsd: 0.13 "
@@ -229,23 +193,33 @@ class YangParams(HealthParams):
 
 
 class YangFusionKF(Estimator):
-    """Yang et al.'s altitude measurement (seed 003): time-unified, optimally weighted
+    """Yang et al.'s altitude measurement (yang2020): time-unified, optimally weighted
     GPS/baro/radio-altimeter heights and a height/speed/acceleration Kalman filter."""
 
     Params = YangParams
     streams = (BARO, GPS_VZ, RADAR, ACC)
 
     def configure(self, clock) -> None:
-        """Q of one step of the estimator (white jerk; the bias random walks with
-        ``fault_detection``), built once: ``propagate`` is always called with this step."""
+        """The states (Ω of eq. 9; with ``fault_detection`` the accelerometer bias, the baro
+        offset and, with ``gps_bias_psd`` > 0, the GPS offset) and Q of one step of the
+        estimator (white jerk, the offsets' random walks), built once: ``propagate`` is
+        always called with this step."""
         p, dt = self.params, clock.step_size
-        walks = ((p.acc_bias_psd * dt, p.baro_bias_psd * dt, p.gps_bias_psd * dt)
-                 if p.fault_detection else (0.0, 0.0, 0.0))
+        walks = ()
+        if p.fault_detection:
+            walks = (p.acc_bias_psd * dt, p.baro_bias_psd * dt,
+                     *((p.gps_bias_psd * dt,) if p.gps_bias_psd > 0.0 else ()))
+        self._n = 3 + len(walks)
         self._Q = constant_states_noise(white_jerk_noise(dt, p.jerk_psd), walks)
+        self._height_rows = {name: (*HEIGHT_ROW, *(((OFFSET_STATE[name], 1.0),)
+                                                   if OFFSET_STATE.get(name, self._n) < self._n
+                                                   else ()))
+                             for name in HEIGHT_SENSORS}
+        """H of each height sensor: the height, plus its offset where it has one."""
 
     def initialize_filter(self) -> None:
         p = self.params
-        self.x = (0.0,) * 6
+        self.x = (0.0,) * self._n
         self.P = self._initial_covariance(p.R_baro)
         self.history = {name: deque(maxlen=2) for name in HEIGHT_SENSORS}
         self.variances = {"radar": p.R_radar, "gps": p.R_gps, "baro": p.R_baro}
@@ -261,9 +235,33 @@ class YangFusionKF(Estimator):
         self.x, self.P = predict_constant_acceleration(self.x, self.P, dt, self._Q)
 
     def fuse_samples(self, samples) -> None:
-        """Gate and store the new heights, fuse at a benchmark sample, then one KF update
-        (which also publishes the time update of :meth:`propagate`)."""
+        """Gate and store the new heights, fuse them at a benchmark sample (eqs. 5-8), then
+        one Kalman update (eqs. 12-14; also publishes the time update of :meth:`propagate`)."""
         now, p = self.time, self.params
+        arrived = self._new_heights(samples, now)
+        benchmark = self._benchmark(now)
+        heights = None
+        if benchmark in arrived:
+            live = self._fuse_heights(self.history[benchmark][-1][0])
+            if self.started:
+                heights = live
+            else:
+                self._start()
+        gps = samples.get(GPS_VZ)
+        lag = 0.0 if gps is None or p.gps_delay == 0.0 else \
+            max(0.0, now - (gps["gps_time"] - p.gps_delay))
+        acc = samples.get(ACC)
+        if p.fault_detection:
+            self._kalman_update_with_offsets(heights, gps, lag, acc)
+        else:
+            self._kalman_update(heights, gps, lag, acc)
+        self._publish()
+
+    def _new_heights(self, samples, now: float) -> set[str]:
+        """Eq. (6) for the radio altimeter, then each new height sample through its gate
+        (always passed before the filter starts) into its sensor's history; the sensors whose
+        sample entered."""
+        p = self.params
         arrived = set()
         for name, stream, value, stamp in HEIGHT_STREAMS:
             sample = samples.get(stream)
@@ -277,68 +275,62 @@ class YangFusionKF(Estimator):
             if self._gate(name, z):
                 self.history[name].append((sample[stamp], z))
                 arrived.add(name)
-        measurements = []                   # (H, value, variance)
-        heights = {}
-        benchmark = self._benchmark(now)
-        if benchmark in arrived:
-            live = self._fuse_heights(self.history[benchmark][-1][0])
-            if not self.started:
-                self._start()
-            elif p.fault_detection:
-                heights = live
-            else:
-                measurements.append((HEIGHT_ROW, self.h_fused, self.fused_std**2))
-        gps = samples.get(GPS_VZ)
-        lag = 0.0 if gps is None or p.gps_delay == 0.0 else \
-            max(0.0, now - (gps["gps_time"] - p.gps_delay))
-        if gps is not None and self._speed_passes(gps["gps_vz"], lag):
-            measurements.append((speed_row(lag), gps["gps_vz"], p.R_gps_vz))
-        x, P = self.x, self.P                    # (12)-(14), H = I: the rows one by one
-        for name, z in heights.items():
-            row = HEIGHT_ROWS[name]
-            x, P, _ = update_scalar(x, P, row, z - predicted(x, row), self.variances[name])
-        for row, z, R in measurements:
-            x, P, _ = update_scalar(x, P, row, z - predicted(x, row), R)
-        acc = samples.get(ACC)
-        if acc is not None:                      # the IMU measures a + b (b = 0 in the paper)
-            self.accept("acc")
-            x, P, _ = update_scalar(x, P, ACC_ROW, acc["acc_z"] - x[2] - x[3], p.R_acc)
-        self.x, self.P = x, P
-        self._publish()
+        return arrived
 
-    def _gate(self, name: str, z: float) -> bool:
-        """True if the height sample may enter the fusion (always before the filter starts)."""
-        if not self.started:
-            self.accept(name)
-            return True
-        P = self.P
-        offset = OFFSET_STATE.get(name)
-        variance = P[0][0] if offset is None else \
-            P[0][0] + 2.0 * P[0][offset] + P[offset][offset]
-        return self.gate(name, z - predicted(self.x, HEIGHT_ROWS[name]),
-                         variance + self.variances[name], self.params.gate_sigma)
+    def _kalman_update(self, heights, gps, lag: float, acc) -> None:
+        """Eqs. (12)-(14), H = I: the rows of the fused height y (σ_y²), the GPS vertical
+        speed (σ_v²) and the IMU acceleration (σ_a²) that arrived, one after the other."""
+        p = self.params
+        x, P = self.x, self.P
+        if heights is not None:
+            x, P, _ = update_scalar(x, P, HEIGHT_ROW, self.h_fused - sparse_dot(x, HEIGHT_ROW),
+                                    self.fused_std**2)
+        if gps is not None:
+            self.accept(self.aid["gps_vz"])
+            row = speed_row(lag)
+            x, P, _ = update_scalar(x, P, row, gps["gps_vz"] - sparse_dot(x, row), p.R_gps_vz)
+        if acc is not None:
+            self.accept(self.aid["acc"])
+            x, P, _ = update_scalar(x, P, ACC_ROW, acc["acc_z"] - x[2], p.R_acc)
+        self.x, self.P = x, P
+
+    # ------------------------------------------------------------------ fault layer
+    def _kalman_update_with_offsets(self, heights, gps, lag: float, acc) -> None:
+        """The fault layer's eqs. (12)-(14): the time-unified heights one by one, each with
+        its offset; the GPS vertical speed gated; the IMU acceleration with its bias."""
+        p = self.params
+        speed = gps is not None and self._speed_passes(gps["gps_vz"], lag)
+        x, P = self.x, self.P
+        for name, z in (heights or {}).items():
+            row = self._height_rows[name]
+            x, P, _ = update_scalar(x, P, row, z - sparse_dot(x, row), self.variances[name])
+        if speed:
+            row = speed_row(lag)
+            x, P, _ = update_scalar(x, P, row, gps["gps_vz"] - sparse_dot(x, row), p.R_gps_vz)
+        if acc is not None:
+            self.accept(self.aid["acc"])
+            x, P, _ = update_scalar(x, P, ACC_BIAS_ROW, acc["acc_z"] - x[2] - x[ACC_BIAS],
+                                    p.R_acc)
+        self.x, self.P = x, P
 
     def _speed_passes(self, vz: float, lag: float) -> bool:
         """The gate on the GPS vertical speed against the predicted speed at its instant,
-        ``lag`` before the clock (``gps_delay``; not in the paper;
-        none before the filter starts, whose speed is then a guess). The speed variance is
-        overconfident at a closed-loop take-off: after ``reset_timeout`` of rejections the
-        speed resets onto the GPS (base machinery). Gate and reset come together: with
-        ``fault_detection`` false the speed is fused ungated, as in the paper."""
-        if not (self.started and self.params.fault_detection):
-            self.accept("gps_vz")
+        ``lag`` before the clock (none before the filter starts, whose speed is then a
+        guess). The speed variance is overconfident at a closed-loop take-off: after
+        ``reset_timeout`` of rejections the speed resets onto the GPS."""
+        if not self.started:
+            self.accept(self.aid["gps_vz"])
             return True
         row = speed_row(lag)
-        return self.gate("gps_vz", vz - predicted(self.x, row),
+        return self.gate(self.aid["gps_vz"], vz - sparse_dot(self.x, row),
                          quadratic_form(self.P, row) + self.params.R_gps_vz,
-                         self.params.gate_sigma)
+                         self.params.gate_sigma) is Verdict.FUSED
 
     def reset_height(self, source: str, innovation: float, variance: float) -> None:
         """A GPS speed reset moves the speed onto the sample. A height reset: height onto the
         sample; speed, acceleration, accelerometer bias and baro offset back to their initial
         variances (their estimates kept): a prediction that drifted out of every gate had an
-        overconfident speed and acceleration (a biased accelerometer fused as a measurement
-        of the acceleration)."""
+        overconfident speed and acceleration."""
         if source == "gps_vz":
             self.x, self.P = reset_state(self.x, self.P, 1, self.x[1] + innovation, variance)
             return
@@ -346,24 +338,37 @@ class YangFusionKF(Estimator):
         self.P = self._initial_covariance(variance)
 
     def reset_offset(self, source: str, innovation: float, variance: float) -> bool:
-        """The offset of an isolated baro or GPS re-admitted (estimators/base.py; the states
-        exist with ``fault_detection``, the only case the base calls this in; the GPS offset
-        only with ``gps_bias_psd`` > 0, else the GPS is an absolute height)."""
-        offset = OFFSET_STATE.get(source)
-        if offset is None or (source == "gps" and self.params.gps_bias_psd == 0.0):
+        """The offset of an isolated baro or GPS re-admitted (the GPS offset only with
+        ``gps_bias_psd`` > 0, else the GPS is an absolute height)."""
+        offset = OFFSET_STATE.get(source, self._n)
+        if offset >= self._n:
             return False
         self.x, self.P = reset_state(self.x, self.P, offset, self.x[offset] + innovation,
                                      variance)
         return True
 
+    # ------------------------------------------------------------------ shared
+    def _gate(self, name: str, z: float) -> bool:
+        """True if the height sample may enter the fusion (always before the filter starts):
+        z - H x against H P Hᵀ + σ_i² (H with the sensor's offset in the fault layer)."""
+        if not self.started:
+            self.accept(self.aid[name])
+            return True
+        P = self.P
+        row = self._height_rows[name]
+        variance = P[0][0] if len(row) == 1 else \
+            P[0][0] + 2.0 * P[0][row[1][0]] + P[row[1][0]][row[1][0]]
+        return self.gate(self.aid[name], z - sparse_dot(self.x, row),
+                         variance + self.variances[name],
+                         self.params.gate_sigma) is Verdict.FUSED
+
     def _initial_covariance(self, height_variance: float) -> tuple[tuple[float, ...], ...]:
         """Diagonal: ``height_variance``, then the initial variances of speed, acceleration
-        and (with ``fault_detection``; else 0: no such state) accelerometer bias and baro
-        offset."""
+        and the fault layer's accelerometer bias, baro offset and GPS offset (0: known)."""
         p = self.params
-        biases = (p.P0_acc_bias, p.P0_baro_bias) if p.fault_detection else (0.0, 0.0)
-        diagonal = (height_variance, p.P0_vz, p.P0_az, *biases, 0.0)
-        return tuple(tuple(v if i == j else 0.0 for j in range(6))
+        diagonal = (height_variance, p.P0_vz, p.P0_az, p.P0_acc_bias, p.P0_baro_bias,
+                    0.0)[:self._n]
+        return tuple(tuple(v if i == j else 0.0 for j in range(self._n))
                      for i, v in enumerate(diagonal))
 
     def _benchmark(self, now: float) -> str | None:
@@ -374,7 +379,7 @@ class YangFusionKF(Estimator):
                 return name
         return None
 
-    def _fuse_heights(self, t_b: float) -> None:
+    def _fuse_heights(self, t_b: float) -> dict[str, float]:
         """Eqs. (5)-(8): unify the live sensors' heights to t_b and fuse them with weights."""
         live = {name: unify_time(history, t_b) for name, history in self.history.items()
                 if history and history[-1][0] >= t_b - self.params.max_sample_age}     # (5)
@@ -392,5 +397,5 @@ class YangFusionKF(Estimator):
 
     def _publish(self) -> None:
         self.h_est, self.vz_est, self.az_est, self.acc_bias, self.baro_bias, self.gps_bias = \
-            self.x
+            (*self.x, 0.0, 0.0, 0.0)[:6]
         self.h_std = math.sqrt(self.P[0][0])

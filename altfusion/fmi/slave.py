@@ -30,12 +30,17 @@ FMI behaviour that pythonfmu 0.7.0 leaves to us:
   to the module's dict it does not own and keeps a list referring to every class it finds;
   the metaclass :class:`~altfusion.fmi.reexec.ReusedSlaveClass` balances the release and
   hands back the existing class so that nothing new is kept (see that module).
-* ``step_size`` 0 (the default) adopts the first doStep's step: until then the core runs on
-  the default experiment's step (initial outputs), and the first doStep rebuilds the not yet
-  stepped core on the host's step, which checks every sample period against it. A later
-  different step is refused (logged at fmi2Error, fmi2Discard).
-* The modelDescription gets UnitDefinitions, per-variable units and bounds, output dependencies,
-  InitialUnknowns and a VendorAnnotation with the core version and core class.
+* Any communication step is taken (``canHandleVariableCommunicationStepSize``): the core ticks
+  on its own step, ``step_size`` (:mod:`altfusion.timegrid`), running every tick that falls
+  within the host's step. ``step_size`` 0 (the default) adopts a tick at the first doStep:
+  until then the core runs on the default experiment's step (initial outputs), and the first
+  doStep rebuilds the not yet stepped core on the host's step if the parameters fit it (every
+  sample period a multiple), else on the default step or the core's own natural step.
+* The modelDescription gets UnitDefinitions, per-variable units and bounds, the outputs'
+  dependencies (none: outputs change only in doStep), InitialUnknowns with the inputs each
+  initial value follows, and a VendorAnnotation with the core version, the core class and the
+  inputs read at the end of a step (its ``stepEndInputs``,
+  :class:`~altfusion.fmi.variables.Output`).
 * In Initialization Mode, outputs follow the parameters and inputs set so far: a set marks the
   core stale and the next get rebuilds it. Importers may set parameters after
   ``enterInitializationMode`` (ECOS applies the SSP parameter set there) and then iterate their
@@ -69,15 +74,20 @@ from altfusion.version import CORE_VERSION
 VENDOR_TOOL = "altfusion"
 
 ADOPT_FIRST_STEP = 0.0
-"""``step_size`` value meaning: the step of the first doStep."""
+"""``step_size`` value meaning: the step of the first doStep (see ``CoreSlave._adopt_step``)."""
+
+MIN_ADOPTED_STEP = 1e-4
+"""Shortest first doStep adopted as the tick, s: a shorter one (a host's tiny remainder step)
+would make every later step run thousands of ticks."""
 
 STEP_SIZE = ParamInfo(
     name="step_size",
     type=float,
     default=ADOPT_FIRST_STEP,
     unit="s",
-    description="Communication step size of this instance; 0 (default): the step of the first "
-                "doStep. Every doStep must then use exactly this step",
+    description="Internal step (tick) of this instance: samples, filter steps and outputs fall "
+                "on its multiples, whatever the host's communication steps; 0 (default): the "
+                "first doStep's step if the parameters fit it, else 0.01 s",
     min=0.0,
     max=None,
     positive=False,
@@ -222,17 +232,26 @@ class CoreSlave(Fmi2Slave, metaclass=ReusedSlaveClass):
                                     resources=self.resources)
 
     def _adopt_step(self, step_size: float) -> bool:
-        """Take the first doStep's step as ``step_size`` and rebuild the core on it (False,
-        with the reason logged, if the parameters do not fit that step)."""
-        self._step_size = float(step_size)
-        try:
-            self._rebuild_core()
-        except Exception as error:
-            self._failure = (f"step_size adopted from the first doStep ({step_size!r} s): "
-                             f"{error}")
-            self._log(Fmi2Status.error, f"cannot step, {self._failure}")
-            return False
-        return True
+        """Choose the tick of a ``step_size`` 0 instance at its first doStep and rebuild the
+        core on it: the host's step if the core takes it and it is at least
+        ``MIN_ADOPTED_STEP``, else the default step, else the core's own
+        :meth:`~altfusion.component.Component.natural_step` (False, with the reasons logged,
+        if none fits the parameters)."""
+        candidates = [step_size] if step_size >= MIN_ADOPTED_STEP else []
+        candidates += [DEFAULT_STEP_SIZE, self.core_class.natural_step(self._params)]
+        reasons = []
+        for candidate in dict.fromkeys(c for c in candidates if c is not None):
+            self._step_size = float(candidate)
+            try:
+                self._rebuild_core()
+                return True
+            except Exception as error:
+                reasons.append(f"{candidate!r} s: {error}")
+        self._step_size = ADOPT_FIRST_STEP
+        self._failure = ("no internal step fits the parameters (tried the first doStep's "
+                         f"step, the default and the core's own: {'; '.join(reasons)})")
+        self._log(Fmi2Status.error, f"cannot step, {self._failure}")
+        return False
 
     def setup_experiment(self, start_time: float, stop_time=None, tolerance=None) -> None:
         self._start_time = float(start_time)
@@ -388,12 +407,14 @@ class CoreSlave(Fmi2Slave, metaclass=ReusedSlaveClass):
         self._set("setString", String, vrs, values)
 
     # ----------------------------------------------------------------- FMU state
+    def _current_state(self) -> dict[str, Any]:
+        """The instance's state (not copied): what getFMUstate copies, setFMUstate replaces."""
+        return {"core": self.core, "params": self._params, "step_size": self._step_size,
+                "start_time": self._start_time, "failure": self._failure}
+
     def _get_fmu_state(self) -> dict[str, Any]:
         try:
-            return copy.deepcopy({
-                "core": self.core, "params": self._params, "step_size": self._step_size,
-                "start_time": self._start_time, "failure": self._failure,
-            })
+            return copy.deepcopy(self._current_state())
         except Exception:
             self._log_exception("getFMUstate")
             return {}
@@ -401,6 +422,12 @@ class CoreSlave(Fmi2Slave, metaclass=ReusedSlaveClass):
     def _set_fmu_state(self, state: dict[str, Any] | fmu_state.RefusedState) -> None:
         if isinstance(state, fmu_state.RefusedState):
             self._log(Fmi2Status.error, f"setFMUstate refused the state: {state.reason}; "
+                                        "the instance keeps its current state")
+            return
+        try:
+            fmu_state.check_like(state, self._current_state())
+        except fmu_state.StateError as error:
+            self._log(Fmi2Status.error, f"setFMUstate refused the state: {error}; "
                                         "the instance keeps its current state")
             return
         try:
@@ -445,7 +472,8 @@ class CoreSlave(Fmi2Slave, metaclass=ReusedSlaveClass):
         tool = SubElement(vendor, "Tool", {"name": VENDOR_TOOL})
         core = self.core_class
         SubElement(tool, "Core", {"version": CORE_VERSION,
-                                  "class": f"{public_module(core.__module__)}:{core.__qualname__}"})
+                                  "class": f"{public_module(core.__module__)}:{core.__qualname__}",
+                                  "stepEndInputs": " ".join(self._step_end_inputs())})
         model_variables = root.find("ModelVariables")
         root.insert(list(root).index(model_variables), vendor)
         index_of: dict[str, int] = {}
@@ -479,20 +507,33 @@ class CoreSlave(Fmi2Slave, metaclass=ReusedSlaveClass):
         return specs
 
     def _write_model_structure(self, structure: Element, index_of: dict[str, int]) -> None:
+        """Outputs with no direct dependency (they change only in doStep), InitialUnknowns
+        with the inputs each initial value follows (``Output.initial_depends_on``)."""
         input_names = [v.name for v in self.variables if isinstance(v, Input)]
         outputs = [v for v in self.variables if isinstance(v, Output)]
         if not outputs:
             return
+        for var in outputs:
+            unknown = set(var.initial_depends_on) | set(var.reads_at_step_end or ())
+            unknown -= set(input_names)
+            if unknown:
+                raise ValueError(f"output {var.name} names unknown inputs {unknown}")
         outputs_node = SubElement(structure, "Outputs")
         for var in outputs:
-            depends = input_names if var.depends_on is None else list(var.depends_on)
-            unknown = set(depends) - set(input_names)
-            if unknown:
-                raise ValueError(f"output {var.name} depends on unknown inputs {unknown}")
-            SubElement(outputs_node, "Unknown", {
-                "index": str(index_of[var.name]),
-                "dependencies": " ".join(str(index_of[n]) for n in depends),
-            })
+            SubElement(outputs_node, "Unknown", {"index": str(index_of[var.name]),
+                                                 "dependencies": ""})
         initial = SubElement(structure, "InitialUnknowns")
         for var in outputs:
-            SubElement(initial, "Unknown", {"index": str(index_of[var.name])})
+            SubElement(initial, "Unknown", {
+                "index": str(index_of[var.name]),
+                "dependencies": " ".join(str(index_of[n]) for n in var.initial_depends_on),
+            })
+
+    def _step_end_inputs(self) -> list[str]:
+        """The inputs some output reads at the end of a step (``Output.reads_at_step_end``)."""
+        inputs = [v.name for v in self.variables if isinstance(v, Input)]
+        read = set()
+        for var in self.variables:
+            if isinstance(var, Output):
+                read |= set(inputs if var.reads_at_step_end is None else var.reads_at_step_end)
+        return [name for name in inputs if name in read]

@@ -138,6 +138,82 @@ def load(data: bytes, expected: StateHeader, own_module: str = "") -> Any:
     return _Decoder(own_module).decode(tree)
 
 
+# ----------------------------------------------------------------------------- checking
+def check_like(new: Any, current: Any, path: str = "state") -> None:
+    """A StateError naming the first field of ``new`` whose type differs from the same field
+    of ``current`` (the instance's state, which ``new`` is about to replace): objects of the
+    same class with the same attributes, arrays of the same dtype kind and shape, numbers for
+    numbers (int or float), Booleans for Booleans, strings for strings, containers of the same
+    kind whose items match (each against the current item at its index, else the last one;
+    dicts by their common keys). None on either side is an unset optional field and matches
+    anything. Checked before anything is replaced, so that a well-checksummed state with a
+    wrongly typed field (``h_est: "x"``) is refused at fmi2SetFMUstate, not found at a later
+    step."""
+    _Checker().check(new, current, path)
+
+
+def _kind(value: Any) -> str:
+    """What a value is, for the messages of :func:`check_like`."""
+    if isinstance(value, np.ndarray):
+        return f"an array of {value.dtype} {list(value.shape)}"
+    return f"a {type(value).__name__} ({value!r:.40})"
+
+
+class _Checker:
+    """:func:`check_like`'s walk, each pair of objects visited once (states share objects
+    and may hold cycles)."""
+
+    def __init__(self) -> None:
+        self._seen: set[tuple[int, int]] = set()
+
+    def check(self, new: Any, current: Any, path: str) -> None:
+        if new is None or current is None:
+            return
+        if isinstance(current, (bool, np.bool_)) or isinstance(new, (bool, np.bool_)):
+            same = isinstance(new, (bool, np.bool_)) and isinstance(current, (bool, np.bool_))
+        elif isinstance(current, (int, float, np.integer, np.floating)):
+            same = isinstance(new, (int, float, np.integer, np.floating))
+        elif isinstance(current, np.ndarray):
+            same = (isinstance(new, np.ndarray) and new.dtype.kind == current.dtype.kind
+                    and new.shape == current.shape)
+        else:
+            same = type(new) is type(current)
+        if not same:
+            raise StateError(f"{path} is {_kind(new)} where this instance has "
+                             f"{_kind(current)}")
+        if (id(new), id(current)) in self._seen:
+            return
+        self._seen.add((id(new), id(current)))
+        if isinstance(current, (list, tuple, collections.deque)):
+            for index, item in enumerate(new):
+                if len(current):
+                    self.check(item, current[min(index, len(current) - 1)],
+                               f"{path}[{index}]")
+        elif isinstance(current, dict):
+            for key in new.keys() & current.keys():
+                self.check(new[key], current[key], f"{path}[{key!r}]")
+        elif _is_data_object(current):
+            new_fields, fields = _object_fields(new), _object_fields(current)
+            if new_fields.keys() != fields.keys():
+                missing = sorted(fields.keys() - new_fields.keys())
+                extra = sorted(new_fields.keys() - fields.keys())
+                raise StateError(f"{path} ({type(current).__name__}) lacks {missing} and "
+                                 f"has {extra}")
+            for name, value in new_fields.items():
+                self.check(value, fields[name], f"{path}.{name}")
+        elif isinstance(current, np.random.Generator) and (
+                type(new.bit_generator) is not type(current.bit_generator)):
+            raise StateError(f"{path} draws from {type(new.bit_generator).__name__} where "
+                             f"this instance has {type(current.bit_generator).__name__}")
+
+
+def _is_data_object(value: Any) -> bool:
+    """An object whose attributes a state holds (not a container, number or array)."""
+    return not isinstance(value, (str, bytes, set, frozenset, enum.Enum, fractions.Fraction,
+                                  np.generic, np.random.Generator)) and (
+        hasattr(value, "__dict__") or hasattr(type(value), "__slots__"))
+
+
 # ----------------------------------------------------------------------------- encoding
 def _core_class(cls: type, own_module: str) -> bool:
     module = cls.__module__

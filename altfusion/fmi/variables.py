@@ -1,8 +1,9 @@
 """Declarations of an FMU's inputs and outputs (its parameters come from the core's Params)."""
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
-from altfusion.estimators.base import SourceBit, Status, stream_inputs, stream_sources
+from altfusion.estimators.health import SourceBit, Status
+from altfusion.estimators.streams import stream_inputs, stream_sources
 from altfusion.signals import SIGNALS
 
 
@@ -23,17 +24,25 @@ class Input:
 class Output:
     """An FMI output read from the core attribute of the same name.
 
-    ``depends_on`` lists the inputs whose value at the end of a step enters the output at that
-    instant (direct feedthrough); ``None`` means every input, ``()`` none (a state output).
+    No output of ours depends directly on an input in FMI's sense: outputs change only in
+    doStep, so ModelStructure/Outputs declares none. What the FMU declares instead:
+
+    * ``initial_depends_on``: the inputs its value in Initialization Mode follows (the core is
+      rebuilt from the inputs set there), written to ModelStructure/InitialUnknowns;
+    * ``reads_at_step_end``: the inputs whose value at the end of a step enters the output at
+      that instant (a sensor samples its input then); ``None`` means every input, ``()`` none.
+      Written to our VendorAnnotation: our runner gives these inputs the source's value at the
+      end of the step (stepping sources first); FMI hosts hold inputs from the step's start.
     """
 
     name: str
     unit: str | None
     description: str
     type: type = float
-    depends_on: tuple[str, ...] | None = None
+    reads_at_step_end: tuple[str, ...] | None = None
     min: float | None = None
     max: float | None = None
+    initial_depends_on: tuple[str, ...] = ()
 
 
 def contract_input(name: str) -> Input:
@@ -42,12 +51,14 @@ def contract_input(name: str) -> Input:
     return Input(name, unit, description, type=kind)
 
 
-def contract_output(name: str, depends_on: tuple[str, ...] | None = None,
-                    description: str | None = None) -> Output:
+def contract_output(name: str, reads_at_step_end: tuple[str, ...] | None = None,
+                    description: str | None = None,
+                    initial_depends_on: tuple[str, ...] = ()) -> Output:
     """An output carrying a signal of the contract; ``description`` replaces the contract's
     where an FMU's source of the signal needs saying (a replayed log, not a sensor model)."""
     kind, unit, meaning = SIGNALS[name]
-    return Output(name, unit, description or meaning, type=kind, depends_on=depends_on)
+    return Output(name, unit, description or meaning, type=kind,
+                  reads_at_step_end=reads_at_step_end, initial_depends_on=initial_depends_on)
 
 
 def status_description() -> str:
@@ -75,14 +86,21 @@ def health_outputs(streams) -> tuple[Output, ...]:
 
 
 def estimator_variables(streams, diagnostics: tuple[Output, ...] = (),
-                        extra_inputs: tuple[str, ...] = ()) -> tuple:
+                        extra_inputs: tuple[str, ...] = (),
+                        initial_depends_on: dict[str, tuple[str, ...]] | None = None) -> tuple:
     """Inputs of an estimator's sensor streams and its extra (stream-less) contract inputs,
     then h_est, vz_est, h_std, the health outputs and diagnostics.
 
-    The estimate at the end of a step fuses the samples of that instant, so every output
-    depends on every input (direct feedthrough)."""
+    The estimate at the end of a step fuses the samples of that instant, so every output reads
+    every input at the step's end; ``initial_depends_on`` names, per common output, the inputs
+    its value in Initialization Mode follows (an estimate started from the held sample)."""
+    initial = initial_depends_on or {}
     names = list(stream_inputs(streams))
     names += [name for name in extra_inputs if name not in names]
     outputs = [contract_output(n) for n in ("h_est", "vz_est", "h_std")]
-    return (*(contract_input(n) for n in names), *outputs, *health_outputs(streams),
-            *diagnostics)
+    common = [replace(o, initial_depends_on=initial.get(o.name, ()))
+              for o in (*outputs, *health_outputs(streams))]
+    unknown = set(initial) - {o.name for o in common}
+    if unknown:
+        raise ValueError(f"initial_depends_on names outputs that are not common: {unknown}")
+    return (*(contract_input(n) for n in names), *common, *diagnostics)

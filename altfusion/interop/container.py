@@ -34,7 +34,7 @@ import numpy as np
 
 from altfusion.cosim.instances import fmu_info
 from altfusion.cosim.results import Results
-from altfusion.cosim.system import SystemSpec
+from altfusion.systems.spec import SystemSpec
 from altfusion.timegrid import TickClock
 
 NUMPY_TYPES = {"Real": np.float64, "Integer": np.int32, "Boolean": np.bool_}

@@ -13,9 +13,9 @@ user of a Jacobi-type host sets each to the step of the sensor the samples come 
 from pathlib import Path
 
 from altfusion.cosim.instances import fmu_info
-from altfusion.cosim.system import ComponentSpec, SystemSpec
 from altfusion.estimators.base import MAX_DELAY
 from altfusion.systems.sensors import SENSORS
+from altfusion.systems.spec import ComponentSpec, SystemSpec
 
 DELAY_OF_STAMP = {"baro_time": "baro_delay", "gps_time": "gps_delay",
                   "radar_time": "range_delay", "laser_time": "range_delay"}

@@ -42,8 +42,8 @@ from altfusion.cosim.instances import (
 )
 from altfusion.cosim.results import Results
 from altfusion.cosim.runner import simulate
-from altfusion.cosim.ssp import read_ssp
-from altfusion.cosim.system import SystemSpec
+from altfusion.cosim.ssp import OSP_SSD, read_ssp
+from altfusion.systems.spec import SystemSpec
 from altfusion.timegrid import TickClock
 
 ENGINES = ("altfusion", "altfusion-jacobi", "libcosim", "libcosim-osp", "ecos", "ecos-proxy")
@@ -145,11 +145,13 @@ def run_libcosim(source: Path, system: SystemSpec, fmu_paths: dict[str, Path],
     reject_bad_parameters(system, fmu_paths)
     log_output_level(CosimLogLevel.WARNING)
     source = Path(source)
+    view = tempfile.TemporaryDirectory(prefix="altfusion_osp_view_")
     try:
         if source.is_dir() or source.suffix == ".xml":
             execution = CosimExecution.from_osp_config_file(str(source))
         else:
-            execution = CosimExecution.from_ssp_file(str(source))
+            ssd = osp_view(source, Path(view.name)) / "SystemStructure.ssd"
+            execution = CosimExecution.from_ssp_file(str(ssd))
     except AssertionError as error:
         raise EngineError(f"libcosim cannot load {source}: {error}") from None
     steps = (recording.rows - 1) * recording.every
@@ -215,6 +217,16 @@ def run_libcosim(source: Path, system: SystemSpec, fmu_paths: dict[str, Path],
 
 
 # ---------------------------------------------------------------------------- ECOS
+def osp_view(ssp: Path, folder: Path) -> Path:
+    """``folder`` holding the archive ``ssp`` extracted, its OSP description (each
+    component's step hint, :data:`~altfusion.cosim.ssp.OSP_SSD`) as ``SystemStructure.ssd``:
+    from there libcosim and ECOS step each component at its own rate. Returns ``folder``."""
+    with zipfile.ZipFile(ssp) as archive:
+        archive.extractall(folder)
+    (folder / OSP_SSD).replace(folder / "SystemStructure.ssd")
+    return folder
+
+
 def parameter_set_names(ssp: Path) -> set[str]:
     from lxml import etree
 
@@ -253,7 +265,9 @@ def run_ecos(ssp: Path, system: SystemSpec, fmu_paths: dict[str, Path],
     recording = Recording.of(system, fmu_paths, stop_time)
     reject_bad_parameters(system, fmu_paths)
     EcosLib.set_log_level("warn")
-    simulation = EcosSimulation(ssp_path=str(ssp), step_size=system.base_step)
+    view = tempfile.TemporaryDirectory(prefix="altfusion_osp_view_")
+    simulation = EcosSimulation(ssp_path=str(osp_view(ssp, Path(view.name))),
+                                step_size=system.base_step)
     getters = {"Real": simulation.get_real, "Integer": simulation.get_integer,
                "Boolean": simulation.get_bool}
     slots = [(getters[s.type], f"{s.component}::{s.variable}") for s in recording.signals]

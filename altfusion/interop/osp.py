@@ -14,7 +14,7 @@ from xml.etree import ElementTree as ET
 
 from fmpy import read_model_description
 
-from altfusion.cosim.system import SystemSpec
+from altfusion.systems.spec import SystemSpec
 
 OSP_NS = "http://opensimulationplatform.com/MSMI/OSPSystemStructure"
 OSP_FILE = "OspSystemStructure.xml"

@@ -19,7 +19,7 @@ import zipfile
 from pathlib import Path
 
 from altfusion.cosim.results import Results
-from altfusion.cosim.system import SystemSpec
+from altfusion.cosim.ssp import OSP_SSD
 from altfusion.interop.engines import (
     SSP_PARAMETER_SET,
     EngineError,
@@ -28,6 +28,7 @@ from altfusion.interop.engines import (
     reject_bad_parameters,
 )
 from altfusion.interop.native import environment_lib
+from altfusion.systems.spec import SystemSpec
 
 
 def libpython() -> Path:
@@ -76,14 +77,19 @@ def ecos_binaries() -> Path:
 
 
 def proxy_ssp(ssp: Path, target: Path) -> Path:
-    """A copy of ``ssp`` whose components ECOS loads through ``proxyfmu`` (one process each)."""
+    """A copy of ``ssp`` whose components ECOS loads through ``proxyfmu`` (one process each),
+    stepping each at its own rate (the archive's OSP description as its
+    ``SystemStructure.ssd``)."""
     with zipfile.ZipFile(ssp) as source, zipfile.ZipFile(target, "w",
                                                          zipfile.ZIP_DEFLATED) as copy:
         for item in source.infolist():
-            data = source.read(item.filename)
             if item.filename == "SystemStructure.ssd":
+                continue
+            data = source.read(item.filename)
+            if item.filename == OSP_SSD:
                 data = data.replace(b'source="resources/',
                                     b'source="proxyfmu://localhost?file=resources/')
+                item.filename = "SystemStructure.ssd"
             copy.writestr(item, data)
     return target
 

@@ -5,12 +5,15 @@ runs).
 For each error metric (estimate - truth, ``Metric`` of the system), with confidence level
 ``CONFIDENCE``:
 
-* versus time (like seed 000, Fig. 3): the RMS over runs at each output sample, with the
+* versus time (like whang2008, Fig. 3): the RMS over runs at each output sample, with the
   chi-square interval of a zero-mean Gaussian error's σ, and the mean error with its t
   interval;
 * overall, treating each run as one independent sample (samples within a run are
-  correlated): RMS over all runs and samples (square root of the t interval of the per-run
-  mean squares), mean (t interval of the per-run means), σ about that mean (same construction
+  correlated), over the rows where the estimate's component is initialized (its ``status``
+  bit INITIALIZED, when its status is recorded; every row otherwise): the RMS over runs,
+  :data:`altfusion.scores.RMS_DEFINITION` (:func:`altfusion.scores.pooled_rms`, as
+  ``altfusion evaluate`` computes it; square root of the t interval of the per-run mean
+  squares), mean (t interval of the per-run means), σ about that mean (same construction
   as the RMS), and the largest |error| (where it occurred, and the mean per-run maximum with
   its t interval).
 
@@ -22,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from altfusion.cosim.system import Metric
+from altfusion.estimators.health import Status
 from altfusion.montecarlo.source import CampaignError
 from altfusion.montecarlo.statistics import (
     Interval,
@@ -38,6 +41,8 @@ from altfusion.montecarlo.storage import (
     load_run,
     read_manifest,
 )
+from altfusion.scores import pooled_rms
+from altfusion.systems.spec import Metric
 
 CONFIDENCE = 0.95
 
@@ -132,15 +137,20 @@ class _MetricAccumulator:
         self.run_max: list[float] = []
         self.worst = (-1.0, -1, 0.0)
 
-    def add(self, index: int, time: np.ndarray, error: np.ndarray) -> None:
+    def add(self, index: int, time: np.ndarray, error: np.ndarray,
+            initialized: np.ndarray) -> None:
+        """One run's error at every output time; its scalars over the ``initialized`` rows."""
         self.per_time.add(error)
         self.sum_squares += error**2
-        self.run_mean.append(float(error.mean()))
-        self.run_mean_square.append(float(np.mean(error**2)))
-        where = int(np.argmax(np.abs(error)))
-        self.run_max.append(float(abs(error[where])))
+        counted, at = error[initialized], time[initialized]
+        if not counted.size:
+            counted, at = np.array([np.nan]), time[:1]
+        self.run_mean.append(float(counted.mean()))
+        self.run_mean_square.append(float(np.mean(counted**2)))
+        where = int(np.argmax(np.abs(counted)))
+        self.run_max.append(float(abs(counted[where])))
         if self.run_max[-1] > self.worst[0]:
-            self.worst = (self.run_max[-1], index, float(time[where]))
+            self.worst = (self.run_max[-1], index, float(at[where]))
 
     def result(self, confidence: float) -> MetricStatistics:
         n = len(self.run_mean)
@@ -154,11 +164,12 @@ class _MetricAccumulator:
                               *(bounds if bounds is not None else (None, None)))
         return MetricStatistics(
             self.metric, self.unit,
-            float(np.sqrt(mean_squares.mean())), root_interval(mean_squares, confidence),
+            pooled_rms(mean_squares), root_interval(mean_squares, confidence),
             mean, mean_interval(means, confidence),
             float(np.sqrt(max(variances.mean(), 0.0))), root_interval(variances, confidence),
             self.worst[0], self.worst[1], self.worst[2],
-            float(np.mean(self.run_max)), mean_interval(np.array(self.run_max), confidence),
+            float(np.mean(self.run_max)),
+            mean_interval(np.array(self.run_max), confidence, nonnegative=True),
             np.sqrt(mean_squares), profile,
         )
 
@@ -167,6 +178,15 @@ def _signal(results, name: str, path: Path) -> np.ndarray:
     if name not in results.columns:
         raise CampaignError(f"{path}: signal '{name}' was not recorded")
     return results[name]
+
+
+def initialized_rows(results, metric: Metric) -> np.ndarray:
+    """Rows where the estimate's component has the status bit INITIALIZED (every row when
+    its ``status`` is not recorded)."""
+    status = results.columns.get(f"{metric.estimate.partition('.')[0]}.status")
+    if status is None:
+        return np.ones(results.time.size, dtype=bool)
+    return (status.astype(np.int64) & int(Status.INITIALIZED)) != 0
 
 
 def aggregate(out: Path, confidence: float = CONFIDENCE) -> CampaignStatistics:
@@ -197,7 +217,7 @@ def aggregate(out: Path, confidence: float = CONFIDENCE) -> CampaignStatistics:
             metric = accumulator.metric
             error = _signal(results, metric.estimate, out) - _signal(results, metric.truth, out)
             accumulator.unit = results.units.get(metric.estimate, "")
-            accumulator.add(index, time, error)
+            accumulator.add(index, time, error, initialized_rows(results, metric))
         for name, values in results.columns.items():
             if name not in envelopes:
                 envelopes[name] = (_Welford(values.shape), values.copy(), values.copy(),

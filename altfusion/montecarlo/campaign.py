@@ -10,6 +10,8 @@ from importlib import metadata
 from typing import Any
 
 from altfusion.cosim.instances import check_core_version, fmu_info
+from altfusion.cosim.runner import recorded_columns, recording_size
+from altfusion.errors import ParameterError
 from altfusion.montecarlo.seeds import SEED_PARAMETER, run_seeds, seeded_components
 from altfusion.montecarlo.source import CampaignError, PreparedSystem, SystemSource, load_system
 from altfusion.version import CORE_VERSION
@@ -41,7 +43,7 @@ def plan(source: SystemSource, master_seed: int = 0, stop_time: float | None = N
          parameters: dict[str, Any] | None = None) -> tuple[CampaignTask, PreparedSystem]:
     """Load the system once in this process (no FMU is instantiated) and describe the task."""
     if master_seed < 0:
-        raise CampaignError(f"the master seed must be >= 0, got {master_seed}")
+        raise CampaignError(f"--seed {master_seed}: the master seed must be >= 0")
     prepared = load_system(source)
     for path in prepared.fmu_paths.values():
         check_core_version(fmu_info(path))
@@ -52,6 +54,11 @@ def plan(source: SystemSource, master_seed: int = 0, stop_time: float | None = N
         raise CampaignError(f"{', '.join(clashes)}: seeds are derived per run from the master "
                             f"seed (--seed); they cannot be set")
     stop = prepared.spec.stop_time if stop_time is None else float(stop_time)
+    try:
+        recording_size(prepared.spec, stop, recorded_columns(prepared.spec, prepared.fmu_paths))
+    except ParameterError as error:
+        given = f"--stop {stop:g}" if stop_time is not None else f"stop time {stop:g} s"
+        raise CampaignError(f"{given}: {error.reason}") from None
     task = CampaignTask(source, master_seed, stop, tuple(sorted(parameters.items())), seeded)
     return task, prepared
 

@@ -45,7 +45,7 @@ class CampaignSettings:
         if runs is None:
             raise CampaignError("a new campaign needs its number of runs (-n N)")
         if runs < 1:
-            raise CampaignError(f"the number of runs must be >= 1, got {runs}")
+            raise CampaignError(f"-n {runs}: the number of runs must be >= 1")
         return CampaignSettings(
             runs,
             self.master_seed if self.master_seed is not None else stored.get("master_seed", 0),
@@ -132,10 +132,13 @@ def run_campaign(source: SystemSource, out: Path, settings: CampaignSettings,
 
 def _describe(error: BaseException) -> str:
     """The error message; for errors other than CosimError (which carry the FMU's message and
-    traceback already) followed by the traceback, the worker's one included."""
+    traceback already) its type and message in one line, then the traceback, the worker's one
+    included (the first line is what the command line shows)."""
     if isinstance(error, CosimError):
         return str(error)
-    return "".join(traceback.format_exception(error)).strip()
+    message = " ".join(str(error).split()) or repr(error)
+    return (f"{type(error).__name__}: {message}\n\n"
+            + "".join(traceback.format_exception(error)).strip())
 
 
 def _execute(task: CampaignTask, out: Path, todo: list[int], outcome: CampaignOutcome,
@@ -162,7 +165,7 @@ def _execute(task: CampaignTask, out: Path, todo: list[int], outcome: CampaignOu
                 progress.advance(failed=True)
                 if not succeeded and failures >= FAIL_FAST:
                     stopped = (f"the first {failures} runs failed: "
-                               f"{_describe(error).splitlines()[-1]}")
+                               f"{_describe(error).splitlines()[0]}")
                     outcome = replace(outcome, failing=True)
                     break
                 continue

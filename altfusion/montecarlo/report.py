@@ -13,6 +13,7 @@ from altfusion.atomic import write_text
 from altfusion.montecarlo import plots
 from altfusion.montecarlo.aggregation import CampaignStatistics, aggregate
 from altfusion.montecarlo.tables import HEADER, confidence_note, metric_row, statistics_json
+from altfusion.systems.faults import FAULTS
 
 WORST_RUNS = 5
 STYLE = """body{font-family:sans-serif;max-width:1100px;margin:2em auto;color:#222}
@@ -33,11 +34,13 @@ def esc(value: object) -> str:
     return html.escape(str(value))
 
 
-def table(header: tuple[str, ...] | list[str], rows: list) -> str:
-    head = "".join(f"<th>{esc(h)}</th>" for h in header)
+def table(header: tuple[str, ...] | list[str] | None, rows: list) -> str:
+    """An HTML table; without ``header``, rows only (a list of name-value pairs)."""
+    head = "" if header is None else \
+        "<tr>" + "".join(f"<th>{esc(h)}</th>" for h in header) + "</tr>"
     body = "".join("<tr>" + "".join(f"<td>{esc(c)}</td>" for c in row) + "</tr>"
                    for row in rows)
-    return f"<table><tr>{head}</tr>{body}</table>"
+    return f"<table>{head}{body}</table>"
 
 
 def image(path: Path) -> str:
@@ -80,11 +83,12 @@ def write_report(out: Path) -> Report:
     if statistics.metrics:
         write_profiles_csv(statistics, out / "rms_vs_time.csv")
     page = out / "report.html"
-    write_text(page, render(statistics, pngs))
+    write_text(page, render(statistics, pngs, out))
     return Report(page, pngs, summary, statistics)
 
 
-def render(statistics: CampaignStatistics, pngs: list[Path]) -> str:
+def render(statistics: CampaignStatistics, pngs: list[Path], out: Path) -> str:
+    """The report page of the campaign in ``out``."""
     manifest = statistics.manifest
     system = manifest["system"]
     parts = [f"<h1>Monte Carlo campaign: {esc(system['name'])}</h1>",
@@ -94,9 +98,10 @@ def render(statistics: CampaignStatistics, pngs: list[Path]) -> str:
         parts.append(table(HEADER, [metric_row(m) for m in statistics.metrics]))
     parts.append(f'<p class="note">{esc(confidence_note(statistics))}. RMS and σ: square '
                  f"root of the t interval of the per-run mean squares; versus time: chi-square "
-                 f"interval of a zero-mean Gaussian error's σ at each output time.</p>")
+                 f"interval of a zero-mean Gaussian error's σ at each output time (log axis: "
+                 f"a 0.4 m band stays visible beside a 500 m one).</p>")
     parts += [image(path) for path in pngs]
-    parts += [worst_runs_section(statistics), failures_section(statistics),
+    parts += [worst_runs_section(statistics, out), failures_section(statistics),
               system_section(manifest), versions_section(manifest)]
     body = "\n".join(part for part in parts if part)
     return (f"<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>"
@@ -121,20 +126,28 @@ def campaign_section(statistics: CampaignStatistics) -> str:
                  for kind, items in (("connections", effect["dropped_connections"]),
                                      ("parameters", effect["dropped_parameters"]),
                                      ("recordings", effect["dropped_recordings"])) if items]
-    return "<h2>Campaign</h2>" + table(("", ""), rows)
+    return "<h2>Campaign</h2>" + table(None, rows)
 
 
-def worst_runs_section(statistics: CampaignStatistics) -> str:
+def rerun_command(manifest: dict, out: Path, index: int) -> str:
+    """The command that re-runs run ``index`` of the campaign in ``out`` alone (its settings
+    come from the campaign's manifest; a fault applied with ``--fault`` is named again)."""
+    name = manifest["system"]["name"]
+    fault = name.rpartition("+")[2] if "+" in name else ""
+    option = f" --fault {fault}" if fault in FAULTS else ""
+    return f"altfusion mc {manifest['ssp']} --out {out}{option} --run {index}"
+
+
+def worst_runs_section(statistics: CampaignStatistics, out: Path) -> str:
     if not statistics.metrics:
         return ""
-    master = statistics.manifest["master_seed"]
     rows = []
     for metric in statistics.metrics:
         for k in np.argsort(-metric.run_rms, kind="stable")[:WORST_RUNS]:
             index = statistics.runs[k]
             seeds = ", ".join(f"{n} = {v}" for n, v in statistics.seeds[k].items())
             rows.append((metric.metric.name, index, f"{metric.run_rms[k]:.4g}", seeds,
-                         f"altfusion mc SYSTEM.ssp --seed {master} --run {index}"))
+                         rerun_command(statistics.manifest, out, index)))
     return ("<h2>Largest per-run RMS errors</h2>"
             + table(("metric", "run", "RMS", "seeds", "re-run alone"), rows))
 

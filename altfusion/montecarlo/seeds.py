@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from altfusion.cosim.instances import fmu_info
-from altfusion.cosim.system import SystemSpec
+from altfusion.systems.spec import SystemSpec
 
 SEED_PARAMETER = "seed"
 """The Integer parameter through which a component receives its seed."""

@@ -6,9 +6,9 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from altfusion.cosim.ssp import LoadedSystem, read_ssp
-from altfusion.cosim.system import SystemSpec
 from altfusion.montecarlo.swap import Swap, SwapEffect, file_sha256, find_fmu, swap_component
 from altfusion.systems.faults import FAULT_COMPONENT, FAULT_FMU, with_fault
+from altfusion.systems.spec import SystemSpec
 
 
 class CampaignError(RuntimeError):

@@ -104,13 +104,23 @@ def load_run(out: Path, index: int) -> RunRecord:
         record = read_run(out, index)
     except KeyError as error:
         raise DamagedRunError(f"{path.name}: missing {error.args[0]}") from error
-    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as error:
+    except (OSError, ValueError, EOFError, IndexError, TypeError,
+            zipfile.BadZipFile) as error:
         raise DamagedRunError(f"{path.name}: {type(error).__name__}: {error}") from error
+    time = record.results.time
+    if time.ndim != 1 or not record.results.columns:
+        raise DamagedRunError(f"{path.name}: time of shape {time.shape} and "
+                              f"{len(record.results.columns)} columns; expected a series and "
+                              f"at least one column")
     rows = {values.shape for values in record.results.columns.values()}
-    if record.index != index or rows - {record.results.time.shape}:
+    if record.index != index or rows - {time.shape}:
         raise DamagedRunError(f"{path.name}: inconsistent content (index {record.index}, "
-                              f"column shapes {sorted(rows)} vs time "
-                              f"{record.results.time.shape})")
+                              f"column shapes {sorted(rows)} vs time {time.shape})")
+    dtypes = {str(a.dtype) for a in (time, *record.results.columns.values())
+              if a.dtype.kind != "f"}
+    if dtypes:
+        raise DamagedRunError(f"{path.name}: values of dtype {', '.join(sorted(dtypes))}; "
+                              f"a run records floating-point numbers")
     return record
 
 

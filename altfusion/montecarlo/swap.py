@@ -18,7 +18,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from altfusion.cosim.instances import fmu_info
-from altfusion.cosim.system import SystemSpec
+from altfusion.systems.spec import SystemSpec
 
 
 class SwapError(ValueError):

@@ -3,7 +3,8 @@
 from typing import Any
 
 from altfusion.montecarlo.aggregation import CampaignStatistics, MetricStatistics
-from altfusion.montecarlo.statistics import Interval
+from altfusion.montecarlo.statistics import FEW_RUNS, Interval
+from altfusion.scores import RMS_DEFINITION
 
 HEADER = ("error metric", "unit", "RMS", "mean", "σ", "mean per-run max |e|", "max |e|")
 
@@ -33,8 +34,10 @@ def confidence_note(statistics: CampaignStatistics) -> str:
     if runs != expected:
         note += f" of {expected} ({len(statistics.failed)} failed, "
         note += f"{expected - runs - len(statistics.failed)} not run)"
+    warning = (f"; WARNING: fewer than {FEW_RUNS} runs: the intervals are very wide and the "
+               f"lower ends of RMS, σ and max |e| are clipped at 0" if runs < FEW_RUNS else "")
     return (f"{note}; [brackets]: {100 * statistics.confidence:g} % confidence intervals, "
-            f"each run one independent sample")
+            f"each run one independent sample{warning}; {RMS_DEFINITION}")
 
 
 def format_table(header: tuple[str, ...], rows: list[tuple[str, ...]]) -> str:

@@ -3,15 +3,15 @@
 A lapse-rate atmosphere (ISA by default: troposphere with lapse rate Γ, isothermal above the
 tropopause) whose sea-level pressure p0, temperature T0 and lapse rate change with time:
 
-* linear drift of p0 and T0 from ``drift_start_time`` (seed 002, Section 5);
+* linear drift of p0 and T0 from ``drift_start_time`` (hajiyev, Section 5);
 * a random lapse-rate change every ``lapse_rate_period`` seconds, Γ = Γ_nominal + N(0, σ²),
-  held until the next change (seed 000, Section 3: every 10 s, σ = 0.003 K/m);
-* wind speed = mean + first-order Gauss-Markov gust, clipped at 0 (drives seed 001's
+  held until the next change (whang2008, Section 3: every 10 s, σ = 0.003 K/m);
+* wind speed = mean + first-order Gauss-Markov gust, clipped at 0 (drives bao2017's
   dynamic-pressure disturbance in the air-data sensor);
 * terrain height under the vehicle: flat, or a table of terrain height versus time.
 
 A barometer calibrated at launch and flown in this atmosphere shows the scale-factor and bias
-errors of seed 000 eqs. (2)-(4) without them being injected.
+errors of whang2008 eqs. (2)-(4) without them being injected.
 
 Guard: the input altitude ``h`` is refused (the step fails naming it) when it is NaN or outside
 [``H_MIN``, ``H_MAX``], so no output is NaN while the status is OK.

@@ -1,7 +1,7 @@
 """The barometric height formula of a constant-lapse-rate atmosphere and its inverse.
 
-Seed 000 eq. (1) (with the gas constant restored, see NOTES.md), seed 001 eq. (2) and
-seed 002 eq. (1) are all this formula with a different reference point: the reference
+whang2008 eq. (1) (with the gas constant restored, see docs/papers.md), bao2017 eq. (2) and
+hajiyev eq. (1) are all this formula with a different reference point: the reference
 (H0, T0, P0) is sea level for an atmosphere model and the launch site for a barometer's
 calibration. Γ (``lapse_rate``) is dT/dh, negative in the troposphere.
 """
@@ -41,7 +41,7 @@ def height_from_pressure(
     gravity: float = G0,
     gas_constant: float = R_AIR,
 ) -> float:
-    """Barometric height, m: h = h_ref + (T_ref/Γ)[(p/p_ref)^(-Γ R/g) - 1] (seed 000 eq. 1)."""
+    """Barometric height, m: h = h_ref + (T_ref/Γ)[(p/p_ref)^(-Γ R/g) - 1] (whang2008 eq. 1)."""
     if abs(lapse_rate) < 1e-12:
         return h_ref - gas_constant * T_ref / gravity * math.log(p / p_ref)
     exponent = -lapse_rate * gas_constant / gravity

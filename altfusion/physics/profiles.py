@@ -6,15 +6,15 @@ flight controller can use vz and az as feedforward.
 =================  ===========================================================================
 name               trajectory
 =================  ===========================================================================
-``yang2020``       seed 003 Section 4.1: climb 0-180 s (+0.2 m/s² to 12 m/s, constant, -0.2
+``yang2020``       yang2020 Section 4.1: climb 0-180 s (+0.2 m/s² to 12 m/s, constant, -0.2
                    m/s² to 0), cruise 180-240 s at 1440 m, descend 240-420 s back to 0 m
-``hajiyev``        seed 002 Section 5: the altitude of a static pressure rising from 23 kPa to
+``hajiyev``        hajiyev Section 5: the altitude of a static pressure rising from 23 kPa to
                    99.85 kPa by 0.05 kPa per 1 s sample (10,892 m to 123 m), then held
-``whang2008``      seed 000 Fig. 2 (not in the text; NOTES.md): climb at 10 m/s to 4000 m
+``whang2008``      whang2008 Fig. 2 (not in the text; docs/papers.md): climb at 10 m/s to 4000 m
                    (0.25 m/s² ramps), then cruise
-``xu_hover15``     seed 004 Section 3.1: take off to 15 m and hover
-``xu_hover35``     seed 004 Section 3.1: take off to 35 m and hover
-``xu_multipoint``  seed 004 Section 3.2: hover at 10 m, 22 m, 37 m within 1000 s
+``xu_hover15``     xu2016 Section 3.1: take off to 15 m and hover
+``xu_hover35``     xu2016 Section 3.1: take off to 35 m and hover
+``xu_multipoint``  xu2016 Section 3.2: hover at 10 m, 22 m, 37 m within 1000 s
 ``fault_flight``   the fault suite's generic flight: take off at 5 s to 15 m and hover, climb
                    at 60 s to 120 m and cruise, descend at 200 s and land at 264 s
 ``hold``           hold the offset altitude
@@ -98,7 +98,7 @@ def trapezoid_moves(
 
 
 class PressureDescent(Profile):
-    """Seed 002 Section 5: the altitude whose ISA pressure rises linearly in time.
+    """hajiyev Section 5: the altitude whose ISA pressure rises linearly in time.
 
     p(t) = p_start + rate·t up to p_end, h = eq. (1) with the paper's constants
     (p0 = 101.325 kPa, T0 = 288.15 K, lapse rate 0.0065 K/m, g = 9.81 m/s², R = 287 J/(kg·K)).

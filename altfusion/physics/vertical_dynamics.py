@@ -4,8 +4,10 @@
     dvz/dt = (thrust - m g - c vz |vz|) / m
 
 The thrust input is held over each communication step (zero-order hold) and the state is
-integrated with classical RK4 on fixed internal sub-steps no longer than ``max_substep``, so the
-result is accurate for any communication step. The vehicle rests on the ground at ``ground_h``
+integrated with classical RK4 on internal sub-steps no longer than ``max_substep``, exactly to the
+end of any communication step: a step of one tick (``step_size``) takes the tick's fixed
+sub-steps, any other step (a host's 1e-3 s, its 1e-13 s remainder, a step of several ticks)
+its own equal sub-steps from where the state is. The vehicle rests on the ground at ``ground_h``
 and cannot sink below it. Outputs are the state at the end of the step; ``az`` is the
 acceleration at that instant under the thrust held over the step, so no output depends on the
 thrust value set for the next step (no direct feedthrough).
@@ -31,7 +33,11 @@ MAX_SUBSTEPS = 10_000
 
 @dataclass(frozen=True)
 class VerticalDynamicsParams:
-    mass: float = param(1.5, "kg", "Vehicle mass", positive=True)
+    mass: float = param(
+        1.5, "kg", "Vehicle mass. At least 1 g (a micro air vehicle): the controller's thrust "
+        "(N) on a lighter mass accelerates beyond any floating-point state (1e-300 kg: "
+        "1e301 m/s2)", min=0.001,
+    )
     drag_coefficient: float = param(
         0.05, "kg/m", "Quadratic drag coefficient c: drag force = -c vz |vz|", min=0.0
     )
@@ -76,13 +82,31 @@ class VerticalDynamics(Component):
         p = self.params
         return (thrust - p.mass * p.gravity - p.drag_coefficient * vz * abs(vz)) / p.mass
 
+    def do_step(self, current_time: float, step_size: float) -> None:
+        clock = self.clock
+        start = clock.host_time
+        due = clock.due(current_time, step_size)
+        for _ in range(due):
+            clock.tick()
+        end = clock.host_time
+        if due == 1 and end == clock.now and start == clock.time(clock.ticks - 1):
+            self.update()                       # one tick on the grid: its fixed sub-steps
+        elif end > start:
+            span = end - start
+            substeps = max(1, math.ceil(span / self.params.max_substep - 1e-9))
+            self._integrate(substeps, span / substeps)
+
     def update(self) -> None:
+        self._integrate(self._substeps, self._substep)
+
+    def _integrate(self, substeps: int, dt: float) -> None:
+        """RK4 over ``substeps`` sub-steps of ``dt`` with the thrust held."""
         thrust = self.thrust
         if not math.isfinite(thrust):
             raise ValueError(f"input thrust = {thrust!r} is not finite")
-        h, vz, dt = self.h, self.vz, self._substep
+        h, vz = self.h, self.vz
         accel = self.acceleration
-        for _ in range(self._substeps):
+        for _ in range(substeps):
             # Classical RK4 on (h, vz) with the thrust held constant.
             a1 = accel(vz, thrust)
             v2 = vz + 0.5 * dt * a1

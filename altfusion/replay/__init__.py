@@ -8,9 +8,8 @@
 * :mod:`~altfusion.replay.component` - the ``LogReplay`` core behind the FMU;
 * :mod:`~altfusion.replay.compare`, :mod:`~altfusion.replay.plot` - comparing estimators with
   PX4 EKF2 after a replay run (numpy and matplotlib on recorded results);
-* :mod:`~altfusion.replay.system` - the replay systems (LogReplay feeding estimators, plain
-  :class:`~altfusion.cosim.system.SystemSpec` data) and their tuning; the catalog
-  (:mod:`altfusion.systems`) takes its replay systems from here;
+* :mod:`~altfusion.replay.calibration` - a log's launch calibration (datums) for the replay
+  tuning of the replay systems (:mod:`altfusion.systems.replay`, plain data in the catalog);
 * :mod:`~altfusion.replay.run` - ``altfusion replay``: builds and runs the system through the
   co-simulation runner.
 

@@ -26,13 +26,19 @@ have learnt the baro offset (the learning transients are in the plot, not in the
   its median offset), or its ``h_std`` exceeds that bound.
 """
 
+import csv
+import io
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
+from altfusion.atomic import write_text
 from altfusion.cosim.results import Results
 
 REPLAY = "replay"
+EKF2 = "PX4 EKF2 (reference)"
+"""The name of EKF2's own row in the comparison."""
 SETTLE_TIME = 5.0
 """Offset-learning time after the first valid GPS sample, s: 25 GPS samples at 5 Hz bring the
 bias σ of the replay tuning to ~√(0.6² + 0.8²)/√25 = 0.2 m; Whang's alpha-beta filter, which
@@ -199,7 +205,7 @@ def compare_all(results: Results, estimators: list[str], start: float | None = N
     """EKF2's own row (as a peer: its GPS innovations, baro residuals, ground) and one per
     estimator component."""
     start = settle_time(results) if start is None else start
-    rows = [compare(results, f"{REPLAY}.ekf_h", "PX4 EKF2 (reference)", start)]
+    rows = [compare(results, f"{REPLAY}.ekf_h", EKF2, start)]
     rows += [compare(results, f"{name}.h_est", name, start) for name in estimators]
     return rows
 
@@ -226,3 +232,55 @@ def format_table(reports: list[EstimatorReport]) -> str:
             f"{r.ground.std:14.3f}{rejected:>10}{r.valid_fraction:7.0%}  "
             f"{r.diverged or 'no'}")
     return "\n".join(lines).replace("nan", "  -")
+
+
+SUMMARY_COLUMNS = ("estimate", "vs EKF2: RMS [m]", "mean [m]", "std (common datum) [m]",
+                   "max [m]", "GPS innovation: mean [m]", "std [m]", "NIS",
+                   "baro - h: mean [m]", "std [m]", "h - range: std [m]", "rejected",
+                   "valid", "diverged")
+"""The columns of the saved summary (``<system>_summary.csv`` and ``.md``), as printed."""
+
+
+def summary_values(report: EstimatorReport) -> tuple:
+    """One row of the summary: numbers (nan where nothing was measured; EKF2's own row has
+    no difference to itself), the rejected count (None without one) and the diverged text."""
+    nan = float("nan")
+    versus = (nan,) * 4 if report.name == EKF2 else (
+        report.vs_ekf.rms, report.vs_ekf.mean, report.vs_ekf.std, report.vs_ekf.max_abs)
+    return (report.name, *versus, report.gps_innovation.mean, report.gps_innovation.std,
+            report.nis, report.baro_residual.mean, report.baro_residual.std,
+            report.ground.std, report.rejected, report.valid_fraction,
+            report.diverged or "no")
+
+
+def _text(value, digits: int) -> str:
+    if value is None or (isinstance(value, float) and value != value):
+        return "-"
+    return f"{value:.{digits}f}" if isinstance(value, float) else str(value)
+
+
+def format_markdown(reports: list[EstimatorReport]) -> str:
+    """The comparison as a markdown table (m, 3 decimals; NIS 2; valid in %)."""
+    lines = ["| " + " | ".join(SUMMARY_COLUMNS) + " |", "|" + "---|" * len(SUMMARY_COLUMNS)]
+    for report in reports:
+        values = summary_values(report)
+        cells = [values[0], *(_text(v, 2 if i == 6 else 3) for i, v in enumerate(values[1:10])),
+                 _text(values[10], 3), _text(values[11], 0),
+                 f"{100 * values[12]:.0f} %" if values[12] == values[12] else "-", values[13]]
+        lines.append("| " + " | ".join(str(c).replace("|", "\\|") for c in cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def write_summary(reports: list[EstimatorReport], stem: Path) -> list[Path]:
+    """``<stem>_summary.csv`` (full precision, empty where nothing was measured) and
+    ``<stem>_summary.md`` (the table as printed)."""
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(SUMMARY_COLUMNS)
+    for report in reports:
+        writer.writerow("" if v is None or (isinstance(v, float) and v != v) else
+                        (repr(v) if isinstance(v, float) else v)
+                        for v in summary_values(report))
+    stem = Path(stem)
+    return [write_text(stem.with_name(f"{stem.name}_summary.csv"), buffer.getvalue()),
+            write_text(stem.with_name(f"{stem.name}_summary.md"), format_markdown(reports))]

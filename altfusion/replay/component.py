@@ -30,23 +30,8 @@ from altfusion.params import param
 from altfusion.replay.extract import FlightLog
 from altfusion.replay.streams import SampleStream
 from altfusion.replay.ulog import LogReadError, read_ulog
+from altfusion.signals import LOG_OUTPUTS, LOG_STREAMS
 from altfusion.timegrid import TickClock, exact
-
-STREAM_OUTPUTS: dict[str, tuple[tuple[str, ...], str | None]] = {
-    "baro": (("baro_h", "baro_p", "baro_T"), None),
-    "gps": (("gps_h", "gps_vz", "gps_vdop", "gps_nsat", "gps_epv"), "gps_fix"),
-    "acc": (("acc_z",), None),
-    "laser": (("laser_h",), "laser_valid"),
-    "radar": (("radar_h",), "radar_valid"),
-    "ekf": (("ekf_h", "ekf_vz"), "ekf_valid"),
-}
-"""Per stream prefix: its values and its validity flag (None: always valid)."""
-
-OUTPUT_NAMES: tuple[str, ...] = tuple(
-    name for prefix, (values, valid) in STREAM_OUTPUTS.items()
-    for name in (*values, *((valid,) if valid else ()), f"{prefix}_count", f"{prefix}_time")
-)
-"""Every output of LogReplay, contract names, in declaration order."""
 
 INTEGER_OUTPUTS = ("gps_nsat",)
 
@@ -98,7 +83,7 @@ class LogReplay(Component):
     Params = LogReplayParams
 
     def __init__(self, params: Any = None, **kwargs: Any):
-        for name in OUTPUT_NAMES:
+        for name in LOG_OUTPUTS:
             setattr(self, name, self._initial(name))
         super().__init__(params, **kwargs)
 
@@ -117,7 +102,7 @@ class LogReplay(Component):
         self._ticks: dict[str, np.ndarray] = {}
         self.skipped: dict[str, int] = {}
         for prefix, stream in self.log.streams.items():
-            if prefix not in STREAM_OUTPUTS or not len(stream):
+            if prefix not in LOG_STREAMS or not len(stream):
                 continue
             ticks = delivery_ticks(stream.time, clock, self.params.time_offset)
             self._streams[prefix] = stream
@@ -146,7 +131,7 @@ class LogReplay(Component):
                 for prefix, ticks in self._ticks.items()}
 
     def reset(self) -> None:
-        for name in OUTPUT_NAMES:
+        for name in LOG_OUTPUTS:
             setattr(self, name, self._initial(name))
         if not self.params.log_file:
             self.note("log_file is empty: nothing is replayed")
@@ -167,7 +152,7 @@ class LogReplay(Component):
             self._hold(prefix, stream, delivered - 1, count)
 
     def _hold(self, prefix: str, stream: SampleStream, index: int, count: int) -> None:
-        values, valid = STREAM_OUTPUTS[prefix]
+        values, valid = LOG_STREAMS[prefix]
         for name in values:
             value = stream.values[name][index]
             setattr(self, name, int(value) if name in INTEGER_OUTPUTS else float(value))

@@ -3,7 +3,7 @@
 This is co-simulation-level code (it steps FMUs through fmpy); the FMUs themselves never
 import it. Each estimator gets the inputs its FMU declares (read from its modelDescription),
 each connected to the LogReplay output of the same name, and the replay tuning of
-:mod:`altfusion.replay.system` unless ``paper_tuning``.
+:mod:`altfusion.systems.replay` unless ``paper_tuning``.
 """
 
 import math
@@ -14,19 +14,17 @@ from typing import Any
 from altfusion.cosim.instances import CosimError, fmu_info
 from altfusion.cosim.results import Results
 from altfusion.cosim.runner import Simulation
-from altfusion.cosim.system import SystemSpec
 from altfusion.errors import UsageError
-from altfusion.replay.compare import EstimatorReport, compare_all, settle_time
-from altfusion.replay.extract import FlightLog
+from altfusion.replay.calibration import launch_calibration
+from altfusion.replay.compare import EstimatorReport, compare_all, settle_time, write_summary
+from altfusion.replay.extract import ATTITUDE, EKF_PREFIX, LOCAL_POSITION, FlightLog
 from altfusion.replay.plot import plot_replay
-from altfusion.replay.system import (
-    BASE_STEP,
-    EstimatorEntry,
-    launch_calibration,
-    replay_system,
-    replay_tuning,
-)
-from altfusion.replay.ulog import read_ulog
+from altfusion.replay.ulog import LogReadError, read_ulog
+from altfusion.systems.replay import BASE_STEP, EstimatorEntry, replay_system, replay_tuning
+from altfusion.systems.spec import SystemSpec
+
+DAMAGE = ("missing topic", "non-finite", "bad time stamp", "non-monotonic", "duplicate")
+"""Findings about a sensor topic that say its data are damaged (named when none is left)."""
 
 
 @dataclass
@@ -81,6 +79,16 @@ def plan_replay(log_file: Path, estimators: list[str], fmu_paths: dict[str, Path
     """Read ``log_file`` and build its system with ``estimators`` (FMU model names)."""
     log_file = Path(log_file).resolve()
     log = read_ulog(log_file)
+    if log.duration < BASE_STEP:
+        sensors = [p for s in log.streams.values() if s.prefix != EKF_PREFIX for p in s.problems]
+        found = "; ".join(list(dict.fromkeys(
+            f"{p.topic}: {p.kind}" for p in [*log.problems, *sensors]
+            if p.topic not in (LOCAL_POSITION, ATTITUDE) and p.kind in DAMAGE))[:4])
+        counts = ", ".join(f"{s.topic} {len(s)}" for s in log.streams.values()
+                           if s.prefix != EKF_PREFIX) or "none"
+        raise LogReadError(f"{log_file}: the sensor data span {log.duration:g} s, less than "
+                           f"one replay step ({BASE_STEP:g} s): the sensor section is missing or "
+                           f"damaged (samples: {counts}{'; ' + found if found else ''})")
     if time_offset >= log.duration:
         raise UsageError(f"time offset {time_offset:g} s: at or beyond the end of the log's "
                          f"sensor data ({log.duration:g} s)")
@@ -93,7 +101,8 @@ def plan_replay(log_file: Path, estimators: list[str], fmu_paths: dict[str, Path
 
 def run_replay(plan: ReplayPlan, fmu_paths: dict[str, Path], out: Path,
                parameters: dict[str, Any] | None = None) -> ReplayRun:
-    """Run the plan to the end of the log, compare, write ``<system>.csv`` and ``.png``."""
+    """Run the plan to the end of the log, compare, write ``<system>.csv``, ``.png`` and the
+    comparison beside them (``<system>_summary.csv`` and ``_summary.md``)."""
     with Simulation(plan.spec, fmu_paths) as simulation:
         results = simulation.run(parameters=parameters or {})
     start = settle_time(results)
@@ -103,5 +112,6 @@ def run_replay(plan: ReplayPlan, fmu_paths: dict[str, Path], out: Path,
     png_path = plot_replay(results, plan.estimators, out / f"{plan.spec.name}.png",
                            f"{plan.log_file.name}: estimators vs PX4 EKF2, raw sensors and "
                            f"rangefinder", start)
+    summary = write_summary(reports, out / plan.spec.name)
     return ReplayRun(plan.log, plan.spec, results, reports, start, plan.unconnected,
-                     [csv_path, png_path])
+                     [csv_path, png_path, *summary])

@@ -101,7 +101,7 @@ def clean_order(time_us: np.ndarray, topic: str) -> tuple[np.ndarray, list[LogPr
                                    f"sorted by time"))
     order = np.argsort(time_us, kind="stable")
     ordered = time_us[order]
-    last_of_run = np.append(ordered[1:] != ordered[:-1], True)
+    last_of_run = np.append(ordered[1:] != ordered[:-1], True)[:len(ordered)]
     duplicates = int(np.sum(~last_of_run))
     if duplicates:
         problems.append(LogProblem(topic, "duplicate",

@@ -1,4 +1,4 @@
-"""``altfusion reproduce bao2017``: seed 001 Section 4.3 (Bao et al. 2017), Figs. 7-8.
+"""``altfusion reproduce bao2017``: bao2017 Section 4.3 (Bao et al. 2017), Figs. 7-8.
 
 Campaigns of catalog system ``bao2017`` (``altfusion.systems.bao2017`` describes the
 one-hour static test) with the same master seed, so run i of each sees the same drift, baro
@@ -238,7 +238,7 @@ def claims_table(analysis: BaoAnalysis) -> str:
 
 
 def format_tables(analysis: BaoAnalysis) -> str:
-    return (f"Seed 001 (Bao et al. 2017) Section 4.3, {analysis.runs} Monte Carlo runs of the "
+    return (f"bao2017 (Bao et al. 2017) Section 4.3, {analysis.runs} Monte Carlo runs of the "
             f"1 h static test. Runs won: Clopper-Pearson 95 % interval.\n\n"
             f"{claims_table(analysis)}\n\n{rms_table(analysis)}\n\n{wins_table(analysis)}\n")
 

@@ -33,13 +33,13 @@ from altfusion.atomic import write_text
 from altfusion.cosim.results import Results
 from altfusion.cosim.runner import simulate
 from altfusion.cosim.ssp import read_ssp
+from altfusion.estimators.registry import ESTIMATOR_CLASSES
 from altfusion.montecarlo.execution import CampaignSettings, Execution, run_campaign
 from altfusion.montecarlo.seeds import run_seeds, seeded_components
 from altfusion.montecarlo.source import CampaignError, SystemSource
 from altfusion.montecarlo.statistics import Interval, rms_chi2_bounds, root_interval
 from altfusion.montecarlo.storage import finished_runs, has_manifest, read_manifest, read_run
 from altfusion.montecarlo.swap import SwapError, find_fmu
-from altfusion.replay.system import CATALOG_ESTIMATORS
 from altfusion.reproduce import ReproduceOptions, reproduction
 
 CONFIDENCE = 0.95
@@ -86,7 +86,7 @@ def paper_algorithm(source: SystemSource) -> dict[str, bool]:
     if source.swap is not None:
         fmus[source.swap.component] = source.swap.fmu
     return {f"{name}.fault_detection": False for name, fmu in fmus.items()
-            if fmu in CATALOG_ESTIMATORS}
+            if fmu in ESTIMATOR_CLASSES}
 
 
 def run_campaigns(campaigns: tuple[Campaign, ...], options: ReproduceOptions,

@@ -1,4 +1,4 @@
-"""``altfusion reproduce hajiyev``: seed 002 Section 5 (Hajiyev et al.), Figs. 4-10, Table 1.
+"""``altfusion reproduce hajiyev``: hajiyev Section 5 (Hajiyev et al.), Figs. 4-10, Table 1.
 
 Six campaigns with the same master seed, so run i of each sees the same sensor noise
 (``altfusion.systems.hajiyev`` describes the scenarios):
@@ -9,7 +9,7 @@ Six campaigns with the same master seed, so run i of each sees the same sensor n
 * ``drift/``: catalog system ``hajiyev_drift`` (p0 and T0 drift from k = 23), the same three.
 
 Statistics are over the paper's iterations k = 1..1560 (the samples at t = k s). The paper
-reports single runs; NOTES.md reads Table 1's "error variance" as a run's sample variance of
+reports single runs; docs/papers.md reads Table 1's "error variance" as a run's sample variance of
 the error. So for each run we take the sample variance of its errors over k = 1..n (n = 1560,
 or Table 1's iterations), and report the mean over runs with its 95 % t interval (each run
 one sample) and the 5-95 % range of the single runs, which is where a single run such as
@@ -248,7 +248,7 @@ def format_table(analysis: HajiyevAnalysis) -> str:
     rejected = "; ".join(
         f"{case}: " + ", ".join(f"{e} {n:.3g}" for e, n in errors.rejected.items())
         for case, errors in analysis.cases.items())
-    return (f"Seed 002 (Hajiyev et al.) Section 5, {analysis.runs} Monte Carlo runs of "
+    return (f"hajiyev (Hajiyev et al.) Section 5, {analysis.runs} Monte Carlo runs of "
             f"k = 1..{analysis.cases['constant'].iterations[-1]}. Ours: mean over runs "
             f"[95 % CI]; single runs: 5-95 % range of the runs.\n\n"
             + markdown_table(("case", "quantity", "paper", "ours"), result_rows(analysis))

@@ -1,4 +1,4 @@
-"""``altfusion reproduce whang2008``: seed 000 Section 3 (Whang & Ra 2008), Fig. 3.
+"""``altfusion reproduce whang2008``: whang2008 Section 3 (Whang & Ra 2008), Fig. 3.
 
 Two campaigns with the same master seed, so run i of both sees the same weather and sensor
 noise (``altfusion.systems.whang2008`` describes the scenario):
@@ -224,7 +224,7 @@ def claims_table(analysis: WhangAnalysis) -> str:
 
 def format_tables(analysis: WhangAnalysis) -> str:
     rejected = ", ".join(f"{name} {count:.3g}" for name, count in analysis.rejected.items())
-    return (f"Seed 000 (Whang & Ra 2008) Section 3, {analysis.runs} Monte Carlo runs.\n\n"
+    return (f"whang2008 (Whang & Ra 2008) Section 3, {analysis.runs} Monte Carlo runs.\n\n"
             f"{claims_table(analysis)}\n\n{window_table(analysis)}\n\n"
             f"Samples rejected by the innovation gates, mean per run: {rejected}.\n")
 

@@ -1,4 +1,4 @@
-"""``altfusion reproduce xu2016``: seed 004 Section 3 (Xu et al. 2016), Figs. 10-13.
+"""``altfusion reproduce xu2016``: xu2016 Section 3 (Xu et al. 2016), Figs. 10-13.
 
 Four campaigns with the same master seed, so run i of each sees the same sensor noise
 (``altfusion.systems.xu2016`` describes the scenarios); in each, the UAV flies on XuSHAEKF's
@@ -315,7 +315,7 @@ def format_tables(analysis: XuAnalysis) -> str:
         f"{s.campaign.label}: strong tracking {a.strong_tracking:.3g}, rejected "
         + ", ".join(f"{e} {n:.3g}" for e, n in a.rejected.items())
         for s, a in ((SCENARIOS[n], analysis.scenarios[n]) for n in SCENARIOS))
-    return (f"Seed 004 (Xu et al. 2016) Section 3, {analysis.runs} Monte Carlo runs. Errors "
+    return (f"xu2016 (Xu et al. 2016) Section 3, {analysis.runs} Monte Carlo runs. Errors "
             f"after take-off ({TAKE_OFF:g} s); RMS [95 % CI, runs as samples]; 95th "
             f"percentile [95 % bootstrap CI over runs].\n\n{bounds_table(analysis)}\n\n"
             f"{claims_table(analysis)}\n\nMean per run: {counts}.\n")

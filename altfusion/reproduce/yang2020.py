@@ -1,4 +1,4 @@
-"""``altfusion reproduce yang2020``: seed 003 Section 4 (Yang et al. 2020), Fig. 2.
+"""``altfusion reproduce yang2020``: yang2020 Section 4 (Yang et al. 2020), Fig. 2.
 
 Two campaigns with the same master seed, so run i of both sees the same sensor noise
 (``altfusion.systems.yang2020`` describes the scenario):
@@ -23,7 +23,7 @@ filters at every row. The error is against the plant's altitude at the same inst
 * The Kalman filters' errors are correlated in time: their RMS over the runs gets the
   interval that takes each run as one sample (``rms_over_runs``).
 * "499 times better than GPS, 491 than the barometric altimeter, 388 than the radio
-  altimeter" read as counts of runs (NOTES.md): the runs in which the filter's σ of eq. (15)
+  altimeter" read as counts of runs (docs/papers.md): the runs in which the filter's σ of eq. (15)
   is below that sensor's σ in the same run; likewise against the weighted fusion alone.
 
 Written to the output folder: ``yang2020_fig2.png`` (Fig. 2's equivalent: every run's
@@ -269,7 +269,7 @@ def fused_samples(a: YangAnalysis) -> int:
 
 def format_tables(a: YangAnalysis) -> str:
     tracking = ", ".join(f"{e} {a.tracking[e].text(3)} m" for e in ESTIMATORS)
-    return (f"Seed 003 (Yang et al. 2020) Section 4, {a.count} Monte Carlo runs.\n\n"
+    return (f"yang2020 (Yang et al. 2020) Section 4, {a.count} Monte Carlo runs.\n\n"
             f"{claims_table(a)}\n\n{accuracy_table(a)}\n\n{counts_table(a)}\n\n"
             f"Closed-loop tracking error RMS (plant.h - h_ref, [95 % CI]): {tracking}. "
             f"Height samples rejected by YangFusionKF's gate, mean per run: "

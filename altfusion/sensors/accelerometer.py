@@ -1,7 +1,7 @@
 """Accelerometer: vertical specific force measured with bias and noise, gravity removed.
 
 An accelerometer senses specific force, not acceleration: along the vertical (positive up)
-f = az + g. The measurement (seed 003 eq. 4, seed 004 Section 1.2.1 and its eq. 1, whose
+f = az + g. The measurement (yang2020 eq. 4, xu2016 Section 1.2.1 and its eq. 1, whose
 third row adds -g back) is
 
     f_m   = az + gravity + b + σ·n,      b = bias + bias_std·n₀ (n₀ drawn once per run)
@@ -24,7 +24,8 @@ from altfusion.sensors.sampling import Sample, SampledSensor, SamplingParams, re
 class AccelerometerParams(SamplingParams):
     sample_period: float = param(0.01, "s", "Time between samples (100 Hz)", positive=True)
     noise_std: float = param(
-        0.01, "m/s2", "White noise, 1 sigma (seed 003 Section 4.2: 0.01 m/s2)", min=0.0
+        0.01, "m/s2", "White noise, 1 sigma (yang2020 Section 4.2: 0.01 m/s2). At most 150 m/s2: "
+        "beyond 16 g a MEMS accelerometer's every sample is clipped", min=0.0, max=150.0,
     )
     bias: float = param(0.0, "m/s2", "Constant bias of the specific-force measurement")
     bias_std: float = param(

@@ -1,14 +1,14 @@
 """GnssReceiver: height and vertical velocity with noise, satellite geometry and outages.
 
-Measurement (seed 003 eq. 1, seed 004 eq. 5, with seed 001 Section 3.3's quality indicators):
+Measurement (yang2020 eq. 1, xu2016 eq. 5, with bao2017 Section 3.3's quality indicators):
 
     gps_h  = h + height_bias + e_GM + σ_h·n₁,    σ_h = UERE · VDOP · √max(1, N_ref / N)
     gps_vz = vz + σ_v·n₂
 
 * σ_h: the vertical error is the user-equivalent range error times VDOP (the usual DOP error
   model), growing further when the satellites used N fall below ``nsat_reference`` (fewer
-  redundant ranges). Seed 001 gives no mapping from VDOP and satellites to accuracy; this is
-  the one the air-data/GNSS estimators can invert (NOTES.md, seed 001 eq. 14).
+  redundant ranges). bao2017 gives no mapping from VDOP and satellites to accuracy; this is
+  the one the air-data/GNSS estimators can invert (docs/papers.md, bao2017 eq. 14).
 * VDOP and N (``dop_mode``): ``constant``; ``scheduled`` by the tables ``vdop_schedule`` and
   ``nsat_schedule`` ('t value; ...', each value held from its time on, the first one before
   it); or ``random``: N performs a ±1 random walk in [nsat_min, nsat_max] (a change with
@@ -48,16 +48,20 @@ class GnssParams(SamplingParams):
     sample_period: float = param(1.0, "s", "Time between fixes (1 Hz)", positive=True)
     user_range_error: float = param(
         2.0, "m", "User-equivalent range error, 1 sigma: sigma_h = UERE*VDOP (single-frequency "
-        "GPS: about 2 m; seed 003 simulates sigma_h = 30 m, seed 000 70 m)", min=0.0,
+        "GPS: about 2 m; yang2020 simulates sigma_h = 30 m, whang2008 70 m). At most 1000 m: "
+        "a receiver reports no fix with a worse solution, and sigma_h (up to 250 UERE) then "
+        "stays within the +-100 km the estimators accept as a height (1e200 overflows their "
+        "variances)", min=0.0, max=1000.0,
     )
-    height_bias: float = param(0.0, "m", "Constant height error (seed 004 Section 2)")
+    height_bias: float = param(0.0, "m", "Constant height error (xu2016 Section 2)")
     velocity_noise_std: float = param(
-        0.2, "m/s", "White noise of the vertical velocity, 1 sigma (seed 003 Section 4.2)",
-        min=0.0,
+        0.2, "m/s", "White noise of the vertical velocity, 1 sigma (yang2020 Section 4.2). At most "
+        "100 m/s: the estimators reject speeds beyond 1000 m/s (Mach 3) as implausible",
+        min=0.0, max=100.0,
     )
     gm_std: float = param(
-        0.0, "m", "Stationary 1 sigma of the first-order Gauss-Markov height error; 0: none",
-        min=0.0,
+        0.0, "m", "Stationary 1 sigma of the first-order Gauss-Markov height error; 0: none. "
+        "At most 1000 m, as user_range_error", min=0.0, max=1000.0,
     )
     gm_time_constant: float = param(
         300.0, "s", "Correlation time of the Gauss-Markov height error", positive=True

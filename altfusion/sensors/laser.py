@@ -1,10 +1,10 @@
 """LaserRangefinder: height above the terrain, valid from 0.1 m to 25 m.
 
-Seed 004 Section 1.2.4 and eq. (6): h_l = (h - terrain_h) + ω_l, a 905 nm phase-ranging module
+xu2016 Section 1.2.4 and eq. (6): h_l = (h - terrain_h) + ω_l, a 905 nm phase-ranging module
 measuring 0.1-25 m with an accuracy of ±5 mm at 100 Hz; ±5 mm is taken as the 1σ of the white
 noise ω_l (conservative: a datasheet "±" is often a 2σ or 3σ bound).
 
-Outside [min_range, max_range] the module still sends a frame every period, reading 0 (seed 004
+Outside [min_range, max_range] the module still sends a frame every period, reading 0 (xu2016
 Fig. 11: "the output of laser ranging module is 0"): ``laser_h`` = 0, ``laser_valid`` false,
 and the frame counts as a new sample (``laser_count`` increments, ``laser_time`` moves), so a
 consumer sees each frame and must not fuse the invalid ones. Before the first frame
@@ -22,16 +22,17 @@ from altfusion.timegrid import TickClock
 @dataclass(frozen=True)
 class LaserRangefinderParams(SamplingParams):
     sample_period: float = param(
-        0.01, "s", "Time between frames (seed 004 Section 1.2.4: 100 Hz)", positive=True
+        0.01, "s", "Time between frames (xu2016 Section 1.2.4: 100 Hz)", positive=True
     )
     noise_std: float = param(
-        0.005, "m", "White noise, 1 sigma (seed 004 Section 1.2.4: +-5 mm)", min=0.0
+        0.005, "m", "White noise, 1 sigma (xu2016 Section 1.2.4: +-5 mm). At most 100 m: a "
+        "rangefinder's noise beyond its range is no measurement", min=0.0, max=100.0,
     )
     min_range: float = param(
-        0.1, "m", "Shortest valid range (seed 004 Section 1.2.4)", min=0.0
+        0.1, "m", "Shortest valid range (xu2016 Section 1.2.4)", min=0.0
     )
     max_range: float = param(
-        25.0, "m", "Longest valid range (seed 004 Section 1.2.4)", positive=True
+        25.0, "m", "Longest valid range (xu2016 Section 1.2.4)", positive=True
     )
 
 

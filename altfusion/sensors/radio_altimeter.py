@@ -1,6 +1,6 @@
 """RadioAltimeter: height above the terrain with white noise, up to a maximum range.
 
-Seed 003 eq. (3): h_ra = (h - terrain_h) + δ_ra, δ_ra white with σ_ra (Section 4.2: 10 m,
+yang2020 eq. (3): h_ra = (h - terrain_h) + δ_ra, δ_ra white with σ_ra (Section 4.2: 10 m,
 sampled every 200 ms). The Gaussian error model is kept as the paper writes it, also close to
 the ground (a reading may be negative there).
 
@@ -19,13 +19,14 @@ from altfusion.sensors.sampling import Sample, SampledSensor, SamplingParams, re
 @dataclass(frozen=True)
 class RadioAltimeterParams(SamplingParams):
     sample_period: float = param(
-        0.2, "s", "Time between samples (seed 003 Section 4.2: 200 ms)", positive=True
+        0.2, "s", "Time between samples (yang2020 Section 4.2: 200 ms)", positive=True
     )
     noise_std: float = param(
-        10.0, "m", "White noise, 1 sigma (seed 003 Section 4.2: 10 m)", min=0.0
+        10.0, "m", "White noise, 1 sigma (yang2020 Section 4.2: 10 m). At most 1000 m: a radio "
+        "altimeter's noise beyond its range is no measurement", min=0.0, max=1000.0,
     )
     max_range: float = param(
-        1500.0, "m", "Largest measurable height above the terrain (covers seed 003's 1440 m "
+        1500.0, "m", "Largest measurable height above the terrain (covers yang2020's 1440 m "
         "cruise)", positive=True,
     )
 

@@ -3,9 +3,11 @@
 The multi-rate convention of ``docs/signals.md`` (FMI 2.0 has no clocks):
 
 * samples are taken at t = sample_offset + k·sample_period (k = 0, 1, ...) strictly after the
-  start time, computed in integer ticks of the component's step, so over 3600 s from t = 0 a
-  0.2 s period gives exactly 18000 samples whatever the communication step (as long as the
-  period, the offset and the latency are whole multiples of it);
+  start time, computed in integer ticks of the component's step (its tick), so over 3600 s
+  from t = 0 a 0.2 s period gives exactly 18000 samples whatever the host's communication
+  steps (the period, the offset and the latency are whole multiples of the tick); when several
+  samples fall within one communication step the outputs hold the last and the count rises by
+  the number taken;
 * a sample is delivered exactly ``latency`` after it was taken: its values, its time stamp
   ``<prefix>_time`` (the sampling instant, exact) and the increment of ``<prefix>_count``
   appear together;
@@ -116,6 +118,15 @@ class SampledSensor(Component):
         """Take one sample now (``self.time`` is the sampling instant)."""
 
     # ----------------------------------------------------------------- Component
+    @classmethod
+    def natural_step(cls, params: SamplingParams) -> float:
+        """The greatest common divisor of the sample period, offset and latency."""
+        durations = [exact(d) for d in (params.sample_period, params.sample_offset,
+                                        params.latency) if d > 0]
+        denominator = math.lcm(*(d.denominator for d in durations))
+        numerator = math.gcd(*(int(d * denominator) for d in durations))
+        return numerator / denominator
+
     def configure(self, clock: TickClock) -> None:
         p = self.params
         self._period_ticks = clock.ticks_in(p.sample_period, "sample_period", allow_zero=False)

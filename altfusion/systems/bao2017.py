@@ -1,4 +1,4 @@
-"""Seed 001 Section 4.3 (Bao et al. 2017): the one-hour static drift test behind Fig. 8, as a
+"""bao2017 Section 4.3 (Bao et al. 2017): the one-hour static drift test behind Fig. 8, as a
 catalog system.
 
 * Static test: the barometer and the GPS receiver lie side by side on the ground at the test
@@ -38,11 +38,11 @@ corrected baro sample plus the drift, so at the recorded whole seconds, where bo
 sample, the errors have the same distribution; the 10 Hz run costs 1.6 times as much.
 """
 
-from altfusion.cosim.system import ComponentSpec, Metric, SystemSpec
 from altfusion.estimators.bao import BaoDriftEstimator
 from altfusion.sensors.air_data import SECONDS_PER_HOUR
 from altfusion.systems.plant import plant_components, plant_connections
 from altfusion.systems.sensors import sensor_components, sensor_connections
+from altfusion.systems.spec import ComponentSpec, Metric, SystemSpec
 from altfusion.systems.wiring import estimator_connections
 
 BASE_STEP = 0.2
@@ -97,7 +97,7 @@ METRICS = (Metric("baro error", "air_data.baro_h", "plant.h"),
 
 
 def bao2017() -> SystemSpec:
-    """Seed 001 Section 4.3 with BaoDriftEstimator's adaptive R (eq. 14) as ``estimator``."""
+    """bao2017 Section 4.3 with BaoDriftEstimator's adaptive R (eq. 14) as ``estimator``."""
     components = (
         plant_components("hold", step=PLANT_STEP)
         + sensor_components(SENSOR_NAMES, parameters=SENSORS,
@@ -107,7 +107,7 @@ def bao2017() -> SystemSpec:
     )
     return SystemSpec(
         name="bao2017",
-        description="Seed 001 Section 4.3: 1 h static on the ground, MS5611 baro at 5 Hz "
+        description="bao2017 Section 4.3: 1 h static on the ground, MS5611 baro at 5 Hz "
                     "drifting +10 m/h (random walk 0.03 m²/s), GPS at 5 Hz with scheduled "
                     "VDOP and satellites (σ_G 1.6-8.8 m), BaoDriftEstimator with adaptive R "
                     "(eq. 14)",

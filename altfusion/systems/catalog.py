@@ -3,14 +3,14 @@
 from collections.abc import Callable
 from dataclasses import replace
 
-from altfusion.cosim.system import Metric, SystemSpec
-from altfusion.replay.system import LOGS, catalog_replay
 from altfusion.systems.bao2017 import bao2017
 from altfusion.systems.fault_demo import fault_demo_altitude_ekf, fault_demo_yang
 from altfusion.systems.faults import fault_flight, with_fault
 from altfusion.systems.hajiyev import hajiyev, hajiyev_drift
 from altfusion.systems.plant import plant_components, plant_connections
+from altfusion.systems.replay import LOGS, catalog_replay
 from altfusion.systems.sensors import SEED_003_SENSORS, sensor_components, sensor_connections
+from altfusion.systems.spec import Metric, SystemSpec
 from altfusion.systems.whang2008 import whang2008, whang2008_baseline
 from altfusion.systems.xu2016 import (
     xu2016_hover15,
@@ -22,10 +22,10 @@ from altfusion.systems.yang2020 import yang2020, yang2020_altitude_ekf, yang2020
 
 
 def plant_yang2020() -> SystemSpec:
-    """Seed 003's 420 s climb/cruise/descend flown on the true altitude."""
+    """yang2020's 420 s climb/cruise/descend flown on the true altitude."""
     return SystemSpec(
         name="plant_yang2020",
-        description="VerticalDynamics + Atmosphere + FlightController flying seed 003's "
+        description="VerticalDynamics + Atmosphere + FlightController flying yang2020's "
                     "climb/cruise/descend profile, closed on the true altitude",
         components=plant_components("yang2020"),
         connections=plant_connections(),
@@ -38,13 +38,13 @@ def plant_yang2020() -> SystemSpec:
 
 
 def sensors_yang2020() -> SystemSpec:
-    """Seed 003's profile flown on the true altitude and sensed by all five sensors with
-    seed 003 Section 4.2's error levels; the metrics are each sensor's error."""
+    """yang2020's profile flown on the true altitude and sensed by all five sensors with
+    yang2020 Section 4.2's error levels; the metrics are each sensor's error."""
     return SystemSpec(
         name="sensors_yang2020",
-        description="Plant flying seed 003's climb/cruise/descend profile, sensed by "
+        description="Plant flying yang2020's climb/cruise/descend profile, sensed by "
                     "AirDataModule, GnssReceiver, Accelerometer, RadioAltimeter and "
-                    "LaserRangefinder with seed 003 Section 4.2's noise levels",
+                    "LaserRangefinder with yang2020 Section 4.2's noise levels",
         components=plant_components("yang2020") + sensor_components(
             parameters=SEED_003_SENSORS),
         connections=plant_connections() + sensor_connections(),

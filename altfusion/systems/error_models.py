@@ -2,7 +2,7 @@
 
 An engineer configuring an estimator for a system's sensors tells it what the sensors' data
 sheets and the flight say, not only their white noise (which ``altfusion evaluate`` derives
-from the sensor components, ``evaluate_scenarios.sensor_noise``): a barometer calibrated at
+from the sensor components, ``evaluation.scenarios.sensor_noise``): a barometer calibrated at
 launch, how its error drifts, whether its error grows with height, the terrain under the
 rangefinders, the accelerometer's turn-on bias. :data:`SENSOR_ERRORS` states them per system
 under the names of the estimator parameters that take them; ``altfusion evaluate`` hands each
@@ -52,7 +52,7 @@ FLAT_TERRAIN = {"terrain_h": 0.0, "P0_terrain": KNOWN, "terrain_psd": 0.0}
 
 
 def _whang2008_scale_psd() -> float:
-    """Seed 000's lapse rate, redrawn every 10 s with σ 0.003 K/m, makes the calibrated baro
+    """whang2008's lapse rate, redrawn every 10 s with σ 0.003 K/m, makes the calibrated baro
     err by -δΓ·h²/(2 T0): a local scale error -δΓ·h/T0 of 1σ 0.042 at the 4000 m cruise,
     reached over the 440 s climb; as a random walk of the scale factor, (0.042)²/440 s."""
     top, climb = 4000.0, 440.0
@@ -65,7 +65,7 @@ XU2016 = {**CALIBRATED, **FLAT_TERRAIN,
           "gps_vdop_ref": xu2016.SENSORS["gnss"]["vdop"],
           "P0_acc_bias": xu2016.SENSORS["accelerometer"]["bias_std"] ** 2,
           "acc_bias_psd": 0.0}
-"""Seed 004's sensors (``xu2016.SENSORS``): the laser over flat terrain at 0 m, the MEMS baro
+"""xu2016's sensors (``xu2016.SENSORS``): the laser over flat terrain at 0 m, the MEMS baro
 calibrated at take-off with the AirDataModule's default drift, the GNSS noise stated at VDOP
 1.5, the accelerometer's turn-on bias of σ 0.03 m/s², constant over the flight."""
 
@@ -75,7 +75,7 @@ WIND_BARO_NOISE = math.hypot(xu2016.SENSORS["air_data"]["height_noise_std"],
 dynamic pressure on the static port, ``xu2016``'s docstring), on top of its 0.5 m noise."""
 
 HAJIYEV_DRIFT_RATE = 1.0
-"""m/s: seed 002's drifting p0 and T0 make the baro read low by about 1 m more every second
+"""m/s: hajiyev's drifting p0 and T0 make the baro read low by about 1 m more every second
 (77 m in the first 78 s of the drift)."""
 
 SENSOR_ERRORS: dict[str, dict[str, float]] = {
@@ -92,7 +92,7 @@ SENSOR_ERRORS: dict[str, dict[str, float]] = {
                       "baro_bias_psd": HAJIYEV_DRIFT_RATE**2 * hajiyev.SAMPLE_PERIOD},
     "yang2020": {**CALIBRATED, **NO_SCALE_ERROR, **FLAT_TERRAIN,
                  "baro_bias_psd": SEED_003_SENSORS["air_data"]["drift_variance_rate"],
-                 # seed 003's accelerometer: no turn-on bias
+                 # yang2020's accelerometer: no turn-on bias
                  "P0_acc_bias": max(SEED_003_SENSORS["accelerometer"].get(
                      "bias_std", AccelerometerParams().bias_std) ** 2, KNOWN),
                  "acc_bias_psd": 0.0},

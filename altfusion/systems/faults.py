@@ -9,7 +9,7 @@ generic flight every estimator is tested on side by side.
 * :func:`fault_flight`: a 300 s flight closed on the TRUE altitude (the estimators do not
   change it): take-off from the ground at 5 s to a 15 m hover (the laser in range), a climb
   at 60 s to a 120 m cruise, a descent at 200 s to the ground (landed at 264 s); the five
-  sensors with seed 003's noise levels (the laser with its own 5 mm), the fast ones at 20 Hz;
+  sensors with yang2020's noise levels (the laser with its own 5 mm), the fast ones at 20 Hz;
   every estimator beside the others at 20 Hz, each given its sensors' true noise
   (:data:`TRUE_NOISE`).
 """
@@ -17,15 +17,15 @@ generic flight every estimator is tested on side by side.
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-from altfusion.cosim.system import ComponentSpec, Connection, Metric, SystemSpec
 from altfusion.estimators.baseline import BaselineKFParams
+from altfusion.estimators.registry import ESTIMATOR_CLASSES
 from altfusion.estimators.whang import WhangParams
 from altfusion.estimators.yang import YangParams
-from altfusion.replay.system import CATALOG_ESTIMATORS
 from altfusion.sensors.faults import PASSED_SIGNALS, STREAMS
 from altfusion.systems.error_models import FLAT_TERRAIN
 from altfusion.systems.plant import plant_components, plant_connections
 from altfusion.systems.sensors import SEED_003_SENSORS, sensor_components, sensor_connections
+from altfusion.systems.spec import ComponentSpec, Connection, Metric, SystemSpec
 from altfusion.systems.wiring import estimator_connections
 
 FAULT_COMPONENT = "fault"
@@ -103,7 +103,7 @@ FAULTS: dict[str, FaultScenario] = {f.name: f for f in (
                   25.0 + 30.0),
     FaultScenario("weather_front", "sea-level pressure falls 3 hPa within an hour (about "
                   "25 m of baro height; 2 m over the flight)",
-                  "seed 001 (drift), seed 002 (changing p0/T0)", 0.0, ("baro",), (), 0.0),
+                  "bao2017 (drift), hajiyev (changing p0/T0)", 0.0, ("baro",), (), 0.0),
     FaultScenario("early_late_samples", "GNSS and radar samples stamped 0.05 s ahead of the "
                   "consumer's clock, baro, accelerometer and laser 0.02 s behind",
                   "ECOS behaviour on our systems", 0.0, (), (), 0.0),
@@ -193,7 +193,7 @@ SENSOR_STEPS = {"gnss": 0.1, "radar": 0.2}
 FAST_SENSORS = ("air_data", "accelerometer", "laser")
 SENSORS = {**SEED_003_SENSORS, **{name: {**SEED_003_SENSORS.get(name, {}),
                                          "sample_period": BASE_STEP} for name in FAST_SENSORS}}
-"""Seed 003's sensors (Section 4.2), the baro, accelerometer and laser sampled at 20 Hz
+"""yang2020's sensors (Section 4.2), the baro, accelerometer and laser sampled at 20 Hz
 instead of 100 Hz: the suite runs 15 flights of 15 FMUs, and the base step sets its time
 (the runner's and the FMUs' cost is per step: about 1 ms per base step here)."""
 
@@ -202,8 +202,8 @@ GPS_VARIANCE = SEED_003_SENSORS["gnss"]["user_range_error"] ** 2
 BARO_BIAS_PSD = BaselineKFParams().bias_psd
 """The baro-bias random walk the estimators are told on this flight, m²/s: BaselineKF's
 default (its baro does not drift, its atmosphere has no weather; the faults' drifts, 5 m in
-100 s and 9 m in 10 min, stay within it). Seed 000's weather (Whang's default Q_b, 2000 m²/s)
-and seed 002's drift (Hajiyev's default drift_psd, 1 m²/s) are not this flight's."""
+100 s and 9 m in 10 min, stay within it). whang2008's weather (Whang's default Q_b, 2000 m²/s)
+and hajiyev's drift (Hajiyev's default drift_psd, 1 m²/s) are not this flight's."""
 TRUE_NOISE: dict[str, dict[str, Any]] = {
     "BaselineKF": {"R_baro": BARO_VARIANCE, "R_gps": GPS_VARIANCE},
     "HajiyevAdaptiveEstimator": {"R_baro": BARO_VARIANCE, "R_gps": GPS_VARIANCE,
@@ -222,7 +222,7 @@ TRUE_NOISE: dict[str, dict[str, Any]] = {
                     "radar_noise": SEED_003_SENSORS["radar"]["noise_std"],
                     "laser_noise": 0.005, **FLAT_TERRAIN, "height_ref": "range"},
 }
-"""Each estimator's noise parameters set to the flight's sensors (seed 003 Section 4.2:
+"""Each estimator's noise parameters set to the flight's sensors (yang2020 Section 4.2:
 baro 20 m, GPS 30 m, accelerometer 0.01 m/s²; YangFusionKF's defaults are these already;
 the laser keeps its 5 mm, XuSHAEKF's default; AltitudeEKF takes all of them by their
 contract names). BaoDriftEstimator's worst accepted GNSS
@@ -238,12 +238,12 @@ range): the baro and the GNSS each get an offset state, and a GNSS off by 10 m w
 weight against the radar (0.54 m RMS after it against 1.00 m with the GNSS as reference).
 YangFusionKF gets its GPS-offset state for the same reason (``gps_bias_psd``, at the rate of
 its baro offset's walk: 0.46 m RMS after ``all_fail`` against 0.82 m without).
-The baro-bias walks of WhangGAEstimator (Q_b; default seed 000's weather, a lapse rate
+The baro-bias walks of WhangGAEstimator (Q_b; default whang2008's weather, a lapse rate
 redrawn every 10 s, 400 m² per air-data step) and HajiyevAdaptiveEstimator (``drift_psd``;
-default seed 002's 1 m/s drift, 1 m²/s) are the flight's, :data:`BARO_BIAS_PSD` (Whang's per
+default hajiyev's 1 m/s drift, 1 m²/s) are the flight's, :data:`BARO_BIAS_PSD` (Whang's per
 air-data step: 0.01 m²). Under the paper's 2000 m²/s Whang's bias moves 70 m (1σ) within the
 bias test's 2.5 s: a 100 m GNSS or 200 m baro step is absorbed within 0.5 s, no fault (106 m
-RMS after gnss_step). Under seed 002's 1 m²/s Hajiyev's reference for the GPS-minus-baro
+RMS after gnss_step). Under hajiyev's 1 m²/s Hajiyev's reference for the GPS-minus-baro
 residual is uncertain by 10.5 m after the 100 s outage of ``gnss_outage_return_off``, so a GNSS
 back 50 m off is at most 3.9 standard deviations over the bias test's 2.5 s and not isolated
 (47 m RMS after it); with the flight's walk it is isolated 3 s after it returns."""
@@ -254,31 +254,31 @@ ESTIMATOR_RECORD = ("h_est", "vz_est", "h_std", "h_valid", "status", "n_height_r
 def estimator_record(fmu: str) -> tuple[str, ...]:
     """What :func:`fault_flight` records of estimator ``fmu``: estimate, health, test
     ratios."""
-    core = CATALOG_ESTIMATORS[fmu]
+    core = ESTIMATOR_CLASSES[fmu]
     ratios = tuple(f"{source}_test_ratio" for source in core.sources())
     return tuple(f"{fmu}.{name}" for name in (*ESTIMATOR_RECORD, *ratios))
 
 
-def fault_flight(estimators: tuple[str, ...] = tuple(CATALOG_ESTIMATORS)) -> SystemSpec:
+def fault_flight(estimators: tuple[str, ...] = tuple(ESTIMATOR_CLASSES)) -> SystemSpec:
     """The fault suite's generic flight (module docstring) with ``estimators`` (FMU model
     names) side by side, each a component named after its FMU."""
-    unknown = [name for name in estimators if name not in CATALOG_ESTIMATORS]
+    unknown = [name for name in estimators if name not in ESTIMATOR_CLASSES]
     if unknown:
-        raise ValueError(f"unknown estimators {unknown}; known: {list(CATALOG_ESTIMATORS)}")
+        raise ValueError(f"unknown estimators {unknown}; known: {list(ESTIMATOR_CLASSES)}")
     components = (
         plant_components("fault_flight", step=BASE_STEP)
         + sensor_components(step=BASE_STEP, parameters=SENSORS, steps=SENSOR_STEPS)
         + tuple(ComponentSpec(name, name, BASE_STEP, dict(TRUE_NOISE.get(name, {})))
                 for name in estimators))
     connections = (plant_connections() + sensor_connections()
-                   + sum((estimator_connections(CATALOG_ESTIMATORS[name], name)
+                   + sum((estimator_connections(ESTIMATOR_CLASSES[name], name)
                           for name in estimators), ()))
     return SystemSpec(
         name="fault_flight",
         description="The fault suite's flight, closed on the true altitude: take-off to a "
                     "15 m hover, climb to a 120 m cruise, descent and landing in 300 s; "
                     "baro 20 m at 20 Hz, GPS 30 m / 0.2 m/s at 10 Hz, radio altimeter 10 m at "
-                    "5 Hz, accelerometer 0.01 m/s² at 20 Hz (seed 003's noise), laser 5 mm "
+                    "5 Hz, accelerometer 0.01 m/s² at 20 Hz (yang2020's noise), laser 5 mm "
                     "at 20 Hz; estimators at 20 Hz: " + ", ".join(estimators),
         components=components, connections=connections, stop_time=STOP_TIME,
         base_step=BASE_STEP, output_interval=OUTPUT_INTERVAL,

@@ -1,10 +1,10 @@
-"""Seed 002 Section 5 (Hajiyev, Hacizade, Cilden-Guler): the constant and drift cases as
+"""hajiyev Section 5 (Hajiyev, Hacizade, Cilden-Guler): the constant and drift cases as
 catalog systems.
 
 * Trajectory: the plant flies profile ``hajiyev``: the altitude whose standard-atmosphere
   pressure rises from 23 kPa (10,893 m; the paper says 10,894 m) by 0.05 kPa per 1 s
   iteration to 99.85 kPa (123 m, reached at 1537 s), then holds; 1560 s, the paper's
-  iteration count (NOTES.md: 1538 samples, the last one held). Iteration k is the sample at
+  iteration count (docs/papers.md: 1538 samples, the last one held). Iteration k is the sample at
   t = k s. The loop is closed on the true altitude.
 * AirDataModule and GnssReceiver sample at the same instants every 1 s: baro-height noise
   σ_B = 9 m (R_B = 81 m²), GPS σ_GPS = 13 m (user range error 13 m × VDOP 1, R_GPS = 169 m²);
@@ -19,7 +19,7 @@ catalog systems.
 
 Drift case (``hajiyev_drift``). The paper drifts the baro computation's p0(k) and T0(k) by
 -0.01 kPa and -0.01 K per iteration from k = 23 while the true atmosphere stays standard
-(NOTES.md). The AirDataModule's launch calibration cannot drift, so the true atmosphere
+(docs/papers.md). The AirDataModule's launch calibration cannot drift, so the true atmosphere
 drifts instead, by the same amounts with the opposite sign: p0 +10 Pa/s and T0 +0.01 K/s
 from t = 22 s (the first drifted sample is k = 23). Both make the barometer read low by the
 same amount to first order: -77 m at k = 100 either way. The second-order terms differ as
@@ -40,10 +40,10 @@ Steps: the plant, atmosphere and controller at 0.05 s (the loop tracks the profi
 recorded every 1 s.
 """
 
-from altfusion.cosim.system import ComponentSpec, Connection, Metric, SystemSpec
 from altfusion.estimators.hajiyev import HajiyevAdaptiveEstimator
 from altfusion.systems.plant import plant_components, plant_connections
 from altfusion.systems.sensors import sensor_components, sensor_connections
+from altfusion.systems.spec import ComponentSpec, Connection, Metric, SystemSpec
 from altfusion.systems.wiring import estimator_connections
 
 BASE_STEP = 0.05
@@ -98,19 +98,19 @@ def _scenario(name: str, description: str, drift: bool, adaptive: bool) -> Syste
 
 
 def hajiyev() -> SystemSpec:
-    """Seed 002 Section 5, constant p0 and T0: the conventional fusion (eqs. 15-19)."""
+    """hajiyev Section 5, constant p0 and T0: the conventional fusion (eqs. 15-19)."""
     return _scenario(
         "hajiyev",
-        "Seed 002 Section 5, constant case: descent from 10,893 m to 123 m, 9 m baro and "
+        "hajiyev Section 5, constant case: descent from 10,893 m to 123 m, 9 m baro and "
         "13 m GPS every 1 s, HajiyevAdaptiveEstimator non-adaptive (eqs. 15-19)",
         drift=False, adaptive=False)
 
 
 def hajiyev_drift() -> SystemSpec:
-    """Seed 002 Section 5, p0 and T0 drifting from k = 23: the adaptive fusion (eqs. 26-31)."""
+    """hajiyev Section 5, p0 and T0 drifting from k = 23: the adaptive fusion (eqs. 26-31)."""
     return _scenario(
         "hajiyev_drift",
-        "Seed 002 Section 5, drift case: the descent with sea-level pressure and temperature "
+        "hajiyev Section 5, drift case: the descent with sea-level pressure and temperature "
         "drifting 0.01 kPa and 0.01 K per second from k = 23, HajiyevAdaptiveEstimator "
         "adaptive (eqs. 26-31)",
         drift=True, adaptive=True)

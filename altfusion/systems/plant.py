@@ -1,7 +1,7 @@
 """The plant block shared by every scenario: vertical dynamics, atmosphere, flight controller."""
 
-from altfusion.cosim.system import ComponentSpec, Connection
 from altfusion.physics.profiles import make_profile
+from altfusion.systems.spec import ComponentSpec, Connection
 
 VEHICLE = {"mass": 1.5, "drag_coefficient": 0.05}
 """A 1.5 kg multirotor; the controller is given the same mass and drag coefficient."""

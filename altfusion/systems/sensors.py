@@ -10,7 +10,7 @@ sensor outputs named in ``docs/signals.md``.
 from dataclasses import dataclass
 from typing import Any
 
-from altfusion.cosim.system import ComponentSpec, Connection
+from altfusion.systems.spec import ComponentSpec, Connection
 
 
 @dataclass(frozen=True)
@@ -42,9 +42,9 @@ SEED_003_SENSORS: dict[str, dict[str, Any]] = {
     "radar": {"noise_std": 10.0, "sample_period": 0.2},
     "accelerometer": {"noise_std": 0.01, "sample_period": 0.01},
 }
-"""Seed 003 Section 4.2: GPS 30 m and 0.2 m/s every 100 ms (VDOP 1, so σ_h = UERE); the
+"""yang2020 Section 4.2: GPS 30 m and 0.2 m/s every 100 ms (VDOP 1, so σ_h = UERE); the
 barometer 20 m every 10 ms with no scale-factor error (and no drift); the radio altimeter
-10 m every 200 ms; the IMU 0.01 m/s². The laser is not in seed 003 and keeps its defaults."""
+10 m every 200 ms; the IMU 0.01 m/s². The laser is not in yang2020 and keeps its defaults."""
 
 
 def sensor_components(names: tuple[str, ...] = tuple(SENSORS), step: float = 0.01,

@@ -8,8 +8,8 @@ inputs are those the estimator's core class declares (the FMU declares the same;
 ``system_tests/test_replay.py`` checks them against the built FMUs).
 """
 
-from altfusion.cosim.system import Connection
 from altfusion.estimators.base import Estimator
+from altfusion.systems.spec import Connection
 
 SENSOR_OF_PREFIX = {"baro": "air_data", "gps": "gnss", "acc": "accelerometer",
                     "radar": "radar", "laser": "laser"}
@@ -17,7 +17,7 @@ SENSOR_OF_PREFIX = {"baro": "air_data", "gps": "gnss", "acc": "accelerometer",
 
 EXTRA_SOURCES = {"wind_speed": "atmosphere.wind_speed"}
 """Sources of the estimator inputs that are no sensor output (``extra_inputs``): the wind
-speed of seed 001's wind correction (eq. 11), the wind the air-data module feels."""
+speed of bao2017's wind correction (eq. 11), the wind the air-data module feels."""
 
 
 def estimator_connections(estimator: type[Estimator], component: str = "estimator",

@@ -1,4 +1,4 @@
-"""Seed 004 Section 3 (Xu et al. 2016): the hover simulations of Section 3.1 and the multipoint
+"""xu2016 Section 3 (Xu et al. 2016): the hover simulations of Section 3.1 and the multipoint
 hovers of Section 3.2, as catalog systems.
 
 * Trajectories (profiles of :mod:`altfusion.physics.profiles`, take-off from the ground at 5 s,
@@ -10,7 +10,7 @@ hovers of Section 3.2, as catalog systems.
 * Loop: the FlightController is closed on XuSHAEKF's estimate (``estimator.h_est``,
   ``estimator.vz_est``), as in the paper's flight tests: the UAV hovers where its estimator
   believes the set point is. The errors are the estimates minus the plant's true altitude.
-* Sensors: the paper gives no noise levels (NOTES.md), so realistic ones of the classes it
+* Sensors: the paper gives no noise levels (docs/papers.md), so realistic ones of the classes it
   names (Section 1.2):
 
   - LaserRangefinder (Section 1.2.4): 100 Hz, σ 5 mm (its ±5 mm read as 1σ), valid from
@@ -22,7 +22,7 @@ hovers of Section 3.2, as catalog systems.
   - GnssReceiver (Section 1.2.3, eq. 5): 5 Hz (the paper: 1-10 Hz), white height noise
     σ 3 m (user range error 2 m × VDOP 1.5);
   - Accelerometer (Section 1.2.1): 100 Hz, white noise σ 0.05 m/s², a turn-on bias of
-    σ 0.03 m/s² drawn per run (a calibrated MEMS accelerometer, NOTES.md).
+    σ 0.03 m/s² drawn per run (a calibrated MEMS accelerometer, docs/papers.md).
 * Sudden GPS failure (``xu2016_hover15``, Section 3.1, Fig. 10): the GPS has no fix from
   60 s to the end (a scheduled outage window: the receiver blocked, Section 1.2.3: "sometimes
   there is no output because the GPS module is blocked").
@@ -46,11 +46,11 @@ barometer and BaselineKF at 0.02 s; the GPS at 0.2 s. Signals are recorded every
 
 from dataclasses import replace
 
-from altfusion.cosim.system import ComponentSpec, Metric, SystemSpec
 from altfusion.estimators.baseline import BaselineKF
 from altfusion.estimators.xu import XuSHAEKF
 from altfusion.systems.plant import plant_components, plant_connections
 from altfusion.systems.sensors import sensor_components, sensor_connections
+from altfusion.systems.spec import ComponentSpec, Metric, SystemSpec
 from altfusion.systems.wiring import estimator_connections
 
 BASE_STEP = 0.01
@@ -136,7 +136,7 @@ def xu2016_hover15() -> SystemSpec:
     """Section 3.1, Figs. 8 and 10: hover at 15 m, the GPS failing suddenly at 60 s."""
     return _scenario(
         "xu2016_hover15",
-        "Seed 004 Section 3.1: hover at 15 m flown on XuSHAEKF, GPS out from 60 s; laser "
+        "xu2016 Section 3.1: hover at 15 m flown on XuSHAEKF, GPS out from 60 s; laser "
         "5 mm at 100 Hz, baro 0.5 m at 50 Hz, GPS 3 m at 5 Hz, accelerometer 0.05 m/s²; "
         "BaselineKF and the non-adaptive XuSHAEKF beside",
         "xu_hover15", HOVER_STOP_TIME, gnss=GPS_FAILURE, kalman=True)
@@ -146,7 +146,7 @@ def xu2016_hover35() -> SystemSpec:
     """Section 3.1, Figs. 9 and 11: hover at 35 m, above the laser's range."""
     return _scenario(
         "xu2016_hover35",
-        "Seed 004 Section 3.1: hover at 35 m (laser out of range) flown on XuSHAEKF; the "
+        "xu2016 Section 3.1: hover at 35 m (laser out of range) flown on XuSHAEKF; the "
         "sensors of xu2016_hover15; BaselineKF and the non-adaptive XuSHAEKF beside",
         "xu_hover35", HOVER_STOP_TIME, kalman=True)
 
@@ -155,7 +155,7 @@ def xu2016_multipoint() -> SystemSpec:
     """Section 3.2, Fig. 12: hovers at 10, 22 and 37 m within 1000 s, no wind."""
     return _scenario(
         "xu2016_multipoint",
-        "Seed 004 Section 3.2: hovers at 10, 22 and 37 m within 1000 s flown on XuSHAEKF, no "
+        "xu2016 Section 3.2: hovers at 10, 22 and 37 m within 1000 s flown on XuSHAEKF, no "
         "wind; the sensors of xu2016_hover15; BaselineKF beside",
         "xu_multipoint", MULTIPOINT_STOP_TIME)
 
@@ -164,6 +164,6 @@ def xu2016_multipoint_wind() -> SystemSpec:
     """Section 3.2, Fig. 13: the multipoint hovers in wind grade 3."""
     return _scenario(
         "xu2016_multipoint_wind",
-        "Seed 004 Section 3.2: the hovers of xu2016_multipoint in wind grade 3 (4.4 m/s mean, "
+        "xu2016 Section 3.2: the hovers of xu2016_multipoint in wind grade 3 (4.4 m/s mean, "
         "1 m/s gusts) acting on the barometer; BaselineKF beside",
         "xu_multipoint", MULTIPOINT_STOP_TIME, atmosphere=WIND_GRADE_3)

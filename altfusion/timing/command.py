@@ -9,8 +9,8 @@ from pathlib import Path
 
 from altfusion.cosim.results import Results
 from altfusion.cosim.ssp import LoadedSystem, read_ssp, write_ssp
-from altfusion.cosim.system import SystemSpec
 from altfusion.errors import UsageError
+from altfusion.systems.spec import SystemSpec
 from altfusion.timing.check import StreamResult, check_stream
 from altfusion.timing.report import format_report
 from altfusion.timing.streams import Stream, sensor_streams, timing_signals

@@ -16,8 +16,8 @@ from pathlib import Path
 
 from fmpy import read_model_description
 
-from altfusion.cosim.system import SystemSpec
 from altfusion.errors import UsageError
+from altfusion.systems.spec import SystemSpec
 from altfusion.timegrid import exact
 
 SCHEDULE_PARAMETERS = ("sample_period", "sample_offset", "latency")

@@ -2,8 +2,9 @@
 
 pythonfmu 0.7.0's library segfaults on the resource URIs ``file:/p`` and
 ``file://localhost/p``, aborts a C host at exit unless it calls the non-standard
-``finalizePythonInterpreter``, forwards no message while ``loggingOn`` is off and returns
-fmi2OK for failures the Python side can only log. Our shim, compiled here with the system C
+``finalizePythonInterpreter`` (which finalizes the interpreter pythonfmu started, so a host
+freeing its instances later crashes), forwards no message while ``loggingOn`` is off and
+returns fmi2OK for failures the Python side can only log. Our shim, compiled here with the system C
 compiler, becomes ``binaries/linux64/<model identifier>.so``; pythonfmu's library moves beside
 it as :data:`PYTHONFMU_LIBRARY`, which the shim loads (``dlopen``) and forwards every FMI call
 to. The win64 binary stays pythonfmu's own. Design: DEVELOPERS.md, "The native shim".

@@ -11,10 +11,20 @@
  *    finalizePythonInterpreter ran first. Once pythonfmu is loaded, the shim registers a
  *    handler that calls the finalizer: handlers run in reverse order of registration, at exit
  *    or when the host unloads the shim, so it runs before pythonfmu's static destructors.
- *    In a C host pythonfmu starts the interpreter, which cannot be started twice (numpy): the
- *    shim then loads pythonfmu with RTLD_NODELETE and pins itself the same way, so both stay
- *    until exit. In a Python host both unload with the host's dlclose (each unload and reload
- *    would otherwise keep ~0.4 MB). Calling the finalizer again is harmless.
+ *    In a Python host both unload with the host's dlclose (each unload and reload would
+ *    otherwise keep ~0.4 MB). Calling the finalizer again is harmless.
+ *  - Teardown in any order. pythonfmu's finalizer finalizes the interpreter if pythonfmu
+ *    started it, and a host may tear its instances down in its own exit handlers, which run
+ *    after ours (OMSimulator's) or after a Python host finalized its interpreter. So, in a host
+ *    without a running Python (a C host), the shim starts the interpreter itself before
+ *    pythonfmu loads (pythonfmu then never owns it and its finalizer touches no Python) and
+ *    finalizes it only once the host has freed every instance of every shim in the process
+ *    (a count shared through the interpreter, SHARED_COUNT) and exit has begun; an instance
+ *    the host never frees keeps it alive to the end. The interpreter cannot be started twice
+ *    (numpy): the shim that started it loads pythonfmu with RTLD_NODELETE and pins itself the
+ *    same way. Every FMI call made once the interpreter has been finalized (by a Python host,
+ *    or by us after the last free) touches no Python: fmi2Terminate, fmi2FreeInstance and
+ *    fmi2FreeFMUstate succeed, every other call returns fmi2Error saying why.
  *  - Failures reach the host: pythonfmu is instantiated with logging on; messages of status
  *    fmi2Warning or worse reach the host's logger whatever loggingOn says, the others when the
  *    host asked for them (loggingOn, fmi2SetDebugLogging and its categories). Every call
@@ -39,6 +49,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
+#include <wchar.h>
 
 /* glibc >= 2.34 versions the dl* functions anew; bind the x86-64 baseline versions so the
  * shim needs no newer glibc than pythonfmu's library (2.32). */
@@ -144,8 +156,19 @@ EXPORT void finalizePythonInterpreter(void);
  * shim is linked with -z now: in a process without Python it does not load at all, the
  * loader naming the missing symbol, as pythonfmu's library does. */
 typedef struct PyObject PyObject;
+typedef struct PyThreadState PyThreadState;
 typedef int PyGILState_STATE;
 extern int Py_IsInitialized(void);
+extern void Py_SetProgramName(const wchar_t*);
+extern void Py_InitializeEx(int);
+extern int Py_FinalizeEx(void);
+extern PyThreadState* PyEval_SaveThread(void);
+extern void PyEval_RestoreThread(PyThreadState*);
+extern PyObject* PyCapsule_New(void*, const char*, void (*)(PyObject*));
+extern void* PyCapsule_GetPointer(PyObject*, const char*);
+extern PyObject* PySys_GetObject(const char*);
+extern PyObject* PyImport_ImportModule(const char*);
+extern int PySys_SetObject(const char*, PyObject*);
 extern PyGILState_STATE PyGILState_Ensure(void);
 extern void PyGILState_Release(PyGILState_STATE);
 extern PyObject* PyObject_GetAttrString(PyObject*, const char*);
@@ -273,17 +296,150 @@ static void shim_logger(fmi2ComponentEnvironment env, fmi2String instance_name,
     va_end(again);
 }
 
-/* ---------------------------------------------------------------- loading pythonfmu */
-static void* library;                    /* pythonfmu's */
-static int owns_interpreter;             /* pythonfmu started the interpreter (a C host) */
+/* ---------------------------------------------------------------- the interpreter */
+/* The instances the host holds, over every shim in the process, and whether the exit of the
+ * shim that started the interpreter has begun: that shim finalizes the interpreter when both
+ * say the host is done. Shims of other FMUs (other copies of this library) find it through
+ * the interpreter, as a capsule in `sys` named SHARED_COUNT. */
+typedef struct {
+    pthread_mutex_t lock;
+    long held;
+    int exiting;
+    void (*finalize)(void);       /* the starting shim's finalize_interpreter */
+} SharedCount;
+#define SHARED_COUNT "_altfusion_fmi2_shim_instances_v1"
+
+static SharedCount own_count = {PTHREAD_MUTEX_INITIALIZER, 0, 0, NULL};
+static SharedCount* shared;       /* &own_count in the shim that started Python, NULL in a
+                                   * Python host (the host finalizes its own interpreter) */
+static long held_here;            /* the instances of this library the host holds */
+static int released;              /* release_pythonfmu ran: freed instances are not pooled */
+static int saw_python;            /* the interpreter ran once: if it no longer does, it was
+                                   * finalized and cannot be started again */
 
 static int python_alive(void) {
     return Py_IsInitialized();
 }
 
+#define FINALIZED "the Python interpreter of this process has been finalized, and this call " \
+    "needs it"
+
+/* The interpreter this shim starts lives in a thread of its own, which starts it and, when
+ * asked, finalizes it: Python finalizes cleanly only in the thread that started it or one
+ * holding no thread state, and hosts call FMUs from worker threads (OMSimulator) but run
+ * their exit handlers in the main thread. */
+static pthread_mutex_t interpreter_lock = PTHREAD_MUTEX_INITIALIZER;
+static pthread_cond_t interpreter_changed = PTHREAD_COND_INITIALIZER;
+enum { NOT_STARTED, RUNNING, FINALIZE, FINALIZED_NOW };
+static int interpreter_phase = NOT_STARTED;
+static pthread_t interpreter_thread;
+static pid_t interpreter_process;   /* a forked child has no interpreter thread: it never
+                                     * finalizes */
+
+static void set_phase(int phase) {
+    pthread_mutex_lock(&interpreter_lock);
+    interpreter_phase = phase;
+    pthread_cond_broadcast(&interpreter_changed);
+    pthread_mutex_unlock(&interpreter_lock);
+}
+
+static void wait_for_phase(int phase) {
+    pthread_mutex_lock(&interpreter_lock);
+    while (interpreter_phase != phase) pthread_cond_wait(&interpreter_changed, &interpreter_lock);
+    pthread_mutex_unlock(&interpreter_lock);
+}
+
+static void finalize_interpreter(void) {
+    pthread_mutex_lock(&interpreter_lock);
+    int running = interpreter_phase == RUNNING && getpid() == interpreter_process;
+    if (running) {
+        interpreter_phase = FINALIZE;
+        pthread_cond_broadcast(&interpreter_changed);
+    }
+    pthread_mutex_unlock(&interpreter_lock);
+    if (!running) return;
+    wait_for_phase(FINALIZED_NOW);
+    pthread_join(interpreter_thread, NULL);
+}
+
+/* The interpreter's thread: start it as pythonfmu would, without installing signal handlers
+ * (the host keeps its own), publish the count, finalize when asked. */
+static void* interpreter_main(void* unused) {
+    (void)unused;
+    Py_SetProgramName(L"./PythonFMU");   /* pythonfmu's: Python found by PYTHONHOME, else its
+                                          * own prefix */
+    Py_InitializeEx(0);
+    /* threading's main thread is the one that imports it: this one, as in any Python
+     * process, so that finalizing here waits for no thread a host called an FMU from */
+    PyObject* threading = PyImport_ImportModule("threading");
+    if (threading) Py_DecRef(threading);
+    else PyErr_Clear();
+    own_count.finalize = finalize_interpreter;
+    PyObject* capsule = PyCapsule_New(&own_count, SHARED_COUNT, NULL);
+    if (!capsule || PySys_SetObject(SHARED_COUNT, capsule) != 0) PyErr_Clear();
+    if (capsule) Py_DecRef(capsule);
+    PyThreadState* state = PyEval_SaveThread();
+    set_phase(RUNNING);
+    wait_for_phase(FINALIZE);
+    PyEval_RestoreThread(state);
+    Py_FinalizeEx();
+    set_phase(FINALIZED_NOW);
+    return NULL;
+}
+
+static int start_interpreter(void) {
+    interpreter_process = getpid();
+    if (pthread_create(&interpreter_thread, NULL, interpreter_main, NULL) != 0) return 0;
+    wait_for_phase(RUNNING);
+    shared = &own_count;
+    return 1;
+}
+
+/* The count of the shim that started the interpreter, if one did (Python running). */
+static SharedCount* find_shared_count(void) {
+    PyGILState_STATE gil = PyGILState_Ensure();
+    PyObject* capsule = PySys_GetObject(SHARED_COUNT);   /* borrowed */
+    SharedCount* found = capsule ? PyCapsule_GetPointer(capsule, SHARED_COUNT) : NULL;
+    PyErr_Clear();
+    PyGILState_Release(gil);
+    return found;
+}
+
+/* In a host without Python, each thread that calls an FMU keeps a Python thread state: without
+ * one, pythonfmu's PyGILState_Ensure/Release create and delete a state on every call, which
+ * made OMSimulator's command line (FMUs called from a worker thread) 3.7x slower than its
+ * Python API on yang2020. The state is kept by leaving the thread's GIL-state count at one;
+ * the interpreter's finalization deletes it. */
+static __thread int thread_state_kept;
+
+static void keep_thread_state(void) {
+    if (thread_state_kept || !shared) return;   /* a Python host's threads have their own */
+    PyGILState_Ensure();
+    PyEval_SaveThread();
+    thread_state_kept = 1;
+}
+
+static void count_instance(long change) {
+    pthread_mutex_lock(&lock);
+    held_here += change;
+    pthread_mutex_unlock(&lock);
+    if (!shared) return;
+    pthread_mutex_lock(&shared->lock);
+    shared->held += change;
+    int last = shared->held == 0 && shared->exiting;
+    pthread_mutex_unlock(&shared->lock);
+    if (last) shared->finalize();
+}
+
+/* ---------------------------------------------------------------- loading pythonfmu */
+static void* library;                    /* pythonfmu's */
+static int owns_interpreter;             /* this shim started the interpreter (a C host) */
+
 /* Run at exit, or when the host unloads this library (a handler registered by a shared
  * library also runs at its dlclose): release pythonfmu's state before its static destructors
- * and unload hook do (twice); pooled instances are freed while their Python is alive. */
+ * and unload hook do (twice); pooled instances are freed while their Python is alive. The
+ * instances the host still holds keep pythonfmu loaded and the interpreter running: a host
+ * may free them in its own exit handlers, which run after this one. */
 static void release_pythonfmu(void) {
     int alive = python_alive();
     pthread_mutex_lock(&lock);
@@ -292,12 +448,21 @@ static void release_pythonfmu(void) {
         destroy(pool[i]);
     }
     pooled = 0;
+    released = 1;
+    int held = held_here > 0;
     pthread_mutex_unlock(&lock);
-    if (pythonfmu.finalize) pythonfmu.finalize();
-    if (!owns_interpreter && alive) {   /* unloaded by a Python host: unload pythonfmu too */
+    if (pythonfmu.finalize) pythonfmu.finalize();   /* pythonfmu never owns the interpreter */
+    if (owns_interpreter) {
+        pthread_mutex_lock(&own_count.lock);
+        own_count.exiting = 1;
+        int last = own_count.held == 0;
+        pthread_mutex_unlock(&own_count.lock);
+        if (last) finalize_interpreter();
+    } else if (alive && !held) {   /* unloaded by a Python host: unload pythonfmu too */
         dlclose(library);
         library = NULL;
         load_state = 0;
+        released = 0;
     }
 }
 
@@ -317,9 +482,19 @@ static int load_pythonfmu(void) {
     const char* slash = strrchr(self.dli_fname, '/');
     int folder = slash ? (int)(slash - self.dli_fname) + 1 : 0;
     snprintf(path, sizeof path, "%.*s%s", folder, self.dli_fname, PYTHONFMU_LIBRARY);
-    /* In a host without a running Python, pythonfmu starts the interpreter and must never be
-     * unloaded (finalized, numpy cannot be imported again): it and this library stay. */
+    /* In a host without a running Python, this shim starts the interpreter; it cannot be
+     * started again (numpy), so pythonfmu and this library stay loaded until exit. */
+    if (saw_python && !python_alive()) {
+        snprintf(load_error, sizeof load_error, "%s", FINALIZED);
+        goto done;
+    }
     owns_interpreter = !python_alive();
+    if (owns_interpreter && !start_interpreter()) {
+        snprintf(load_error, sizeof load_error, "cannot start a thread for the interpreter");
+        goto done;
+    }
+    if (!owns_interpreter) shared = find_shared_count();
+    saw_python = 1;
     library = dlopen(path, RTLD_NOW | RTLD_LOCAL | (owns_interpreter ? RTLD_NODELETE : 0));
     if (!library) {
         snprintf(load_error, sizeof load_error, "cannot load pythonfmu's library: %s",
@@ -450,6 +625,11 @@ EXPORT fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String 
         log_own(&probe, fmi2Fatal, "fmi2Instantiate: %s", load_error);
         return NULL;
     }
+    if (!python_alive()) {
+        log_own(&probe, fmi2Error, "fmi2Instantiate: %s", FINALIZED);
+        return NULL;
+    }
+    keep_thread_state();
     char* resources = resource_folder(location, error, sizeof error);
     if (!resources) {
         log_own(&probe, fmi2Error, "fmi2Instantiate: %s", error);
@@ -462,6 +642,7 @@ EXPORT fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String 
         inst->name = copy_string(name);
         inst->host = *functions;
         inst->logging = logging_on;
+        count_instance(1);
         return inst;
     }
     inst = calloc(1, sizeof *inst);
@@ -487,20 +668,31 @@ EXPORT fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String 
         destroy(inst);
         return NULL;
     }
+    count_instance(1);
     return inst;
+}
+
+/* Keep a healthy instance for reuse (1); never once release_pythonfmu ran (0). */
+static int pool_instance(Instance* inst) {
+    inst->worst = fmi2OK;
+    if (released || inst->broken || pythonfmu.fmi2Reset(inst->inner) != fmi2OK
+            || inst->worst > fmi2Warning)
+        return 0;
+    inst->host.logger = NULL;   /* the host's callbacks end here */
+    clear_categories(inst);
+    return put_pooled(inst);
 }
 
 EXPORT void fmi2FreeInstance(fmi2Component c) {
     Instance* inst = c;
     if (!inst) return;
-    inst->worst = fmi2OK;
-    if (!inst->broken && pythonfmu.fmi2Reset(inst->inner) == fmi2OK && inst->worst <= fmi2Warning) {
-        inst->host.logger = NULL;   /* the host's callbacks end here */
-        clear_categories(inst);
-        if (put_pooled(inst)) return;
+    if (!python_alive()) {
+        destroy(inst);   /* pythonfmu's instance went with the interpreter */
+    } else if (!pool_instance(inst)) {
+        pythonfmu.fmi2FreeInstance(inst->inner);
+        destroy(inst);
     }
-    pythonfmu.fmi2FreeInstance(inst->inner);
-    destroy(inst);
+    count_instance(-1);   /* last: it may finalize the interpreter */
 }
 
 EXPORT fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean on, size_t count,
@@ -521,11 +713,22 @@ EXPORT fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean on, size_t co
 }
 
 /* ---------------------------------------------------------------- forwarding */
+/* A call once the interpreter has been finalized: nothing to do for fmi2Terminate,
+ * fmi2Error for anything else (fmi2FreeInstance and fmi2FreeFMUstate are answered where they
+ * are defined). */
+static fmi2Status after_finalization(Instance* inst, const char* function) {
+    if (strcmp(function, "fmi2Terminate") == 0) return fmi2OK;
+    log_own(inst, fmi2Error, "%s: %s", function, FINALIZED);
+    return fmi2Error;
+}
+
 #define ARGS(...) __VA_ARGS__
 #define BEGIN(c) \
     Instance* inst = (c); \
     if (!inst) return fmi2Error; \
-    inst->worst = fmi2OK;
+    inst->worst = fmi2OK; \
+    if (!python_alive()) return after_finalization(inst, __func__); \
+    keep_thread_state();
 #define END(status) \
     fmi2Status result = (status); /* before reading inst->worst, which the call updates */ \
     result = worse(result, inst->worst); \
@@ -561,7 +764,6 @@ FORWARD(fmi2SetBoolean, (const fmi2ValueReference v[], size_t n, const fmi2Boole
 FORWARD(fmi2SetString, (const fmi2ValueReference v[], size_t n, const fmi2String x[]), (v, n, x))
 FORWARD(fmi2GetFMUstate, (fmi2FMUstate* s), (s))
 FORWARD(fmi2SetFMUstate, (fmi2FMUstate s), (s))
-FORWARD(fmi2FreeFMUstate, (fmi2FMUstate* s), (s))
 FORWARD(fmi2SerializedFMUstateSize, (fmi2FMUstate s, size_t* n), (s, n))
 FORWARD(fmi2SerializeFMUstate, (fmi2FMUstate s, fmi2Byte b[], size_t n), (s, b, n))
 FORWARD(fmi2GetDirectionalDerivative,
@@ -579,6 +781,15 @@ FORWARD(fmi2GetRealStatus, (const fmi2StatusKind k, fmi2Real* x), (k, x))
 FORWARD(fmi2GetIntegerStatus, (const fmi2StatusKind k, fmi2Integer* x), (k, x))
 FORWARD(fmi2GetBooleanStatus, (const fmi2StatusKind k, fmi2Boolean* x), (k, x))
 FORWARD(fmi2GetStringStatus, (const fmi2StatusKind k, fmi2String* x), (k, x))
+
+EXPORT fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate* state) {
+    if (c && state && !python_alive()) {   /* the state went with the interpreter */
+        *state = NULL;
+        return fmi2OK;
+    }
+    BEGIN(c)
+    END(pythonfmu.fmi2FreeFMUstate(inst->inner, state))
+}
 
 /* ---------------------------------------------------------------- refused states */
 /* The reason a deserialized state was refused (its Python object's `reason`, a str; see

@@ -5,7 +5,7 @@ nominal RMS of each estimator) and with each fault of :data:`~altfusion.systems.
 The flight is closed on the true altitude, so every estimator is an observer: each is a
 component named after its FMU, connected by contract names to the five sensors, given the
 flight's true sensor noise (the flight's own choices for the estimators it knows, then
-:func:`~.evaluate_scenarios.noise_parameters`). An estimator reading none of the sensors a
+:func:`~.scenarios.noise_parameters`). An estimator reading none of the sensors a
 fault needs (``FaultScenario.needs``) is n/a for that fault: the fault tells nothing about it.
 
 Rate: the flight's own (:func:`~altfusion.systems.faults.fault_flight`: plant, fast
@@ -25,9 +25,8 @@ episode at 150 s) flies the whole flight, as does the nominal flight.
 from dataclasses import replace
 from pathlib import Path
 
-from altfusion.cosim.system import ComponentSpec
-from altfusion.montecarlo.evaluate_metrics import Fault
-from altfusion.montecarlo.evaluate_scenarios import (
+from altfusion.evaluation.metrics import Fault
+from altfusion.evaluation.scenarios import (
     EstimatorInfo,
     Scenario,
     noise_parameters,
@@ -43,6 +42,7 @@ from altfusion.systems.faults import (
     fault_flight,
     with_fault,
 )
+from altfusion.systems.spec import ComponentSpec
 
 AFTER_TRANSIENT = 60.0
 """Seconds flown after the transient of a fault that starts in flight."""

@@ -2,10 +2,11 @@
 estimator side by side in each run, then the metrics of every (estimator, scenario) cell.
 
 Each scenario's system is written once to ``OUT/<scenario>/system.ssp`` with its description
-``scenario.json``; its campaign lives in ``OUT/<scenario>/`` (:mod:`.execution`: seeds,
-workers, storage, atomic writes, resume). Run i of every scenario uses master seed M and run
-index i, so every estimator of a scenario reads the same sensor outputs. ``OUT/evaluation.json``
-records the settings; ``--resume`` checks them and completes the missing runs.
+``scenario.json``; its campaign lives in ``OUT/<scenario>/``
+(:mod:`altfusion.montecarlo.execution`: seeds, workers, storage, atomic writes, resume).
+Run i of every scenario uses master seed M and run index i, so every estimator of a scenario
+reads the same sensor outputs. ``OUT/evaluation.json`` records the settings; ``--resume``
+checks them and completes the missing runs.
 """
 
 import dataclasses
@@ -21,14 +22,15 @@ import numpy as np
 
 from altfusion.atomic import write_text
 from altfusion.cosim.ssp import write_ssp
-from altfusion.montecarlo.evaluate_metrics import (
+from altfusion.evaluation.metrics import (
     RunMetrics,
     Series,
     Summary,
     run_metrics,
     summarize,
+    summarize_rms,
 )
-from altfusion.montecarlo.evaluate_scenarios import (
+from altfusion.evaluation.scenarios import (
     PAPER_SCENARIOS,
     EstimatorInfo,
     EvaluationError,
@@ -66,7 +68,7 @@ class EvaluationSettings:
 
 def available_scenarios() -> dict[str, str]:
     """Scenario name -> kind ('paper' or 'fault'), paper scenarios first."""
-    from altfusion.montecarlo.evaluate_faults import fault_names
+    from altfusion.evaluation.faults import fault_names
 
     return {**dict.fromkeys(PAPER_SCENARIOS, "paper"), **dict.fromkeys(fault_names(), "fault")}
 
@@ -95,7 +97,7 @@ def plan_evaluation(models: Path, estimators: list[str] | None = None,
     kinds = available_scenarios()
     names = _choose("scenarios", scenarios, list(kinds))
     planned: list[Scenario] = []
-    from altfusion.montecarlo.evaluate_faults import NOMINAL, fault_scenario, nominal_scenario
+    from altfusion.evaluation.faults import NOMINAL, fault_scenario, nominal_scenario
 
     if any(kinds[n] == "fault" and n != NOMINAL for n in names) and NOMINAL not in names:
         names.append(NOMINAL)
@@ -219,13 +221,17 @@ class Cell:
     errors: np.ndarray | None = None
     """Error of each run (rows) versus time (columns)."""
     h_std: np.ndarray | None = None
+    startup_end: float = math.inf
+    """When the start-up ends, s (the earliest over the runs)."""
 
     def summary(self, metric: str) -> Summary | None:
-        return summarize([getattr(run, metric) for run in self.runs])
+        values = [getattr(run, metric) for run in self.runs]
+        return summarize_rms(values) if metric == "rms" else summarize(values)
 
     @property
     def rms(self) -> float:
-        """Mean over runs of the run RMS (nan when n/a or no run)."""
+        """The RMS over runs (:data:`altfusion.scores.RMS_DEFINITION`; nan when n/a or no
+        run)."""
         summary = self.summary("rms") if self.runs else None
         return summary.mean if summary is not None else math.nan
 
@@ -261,6 +267,7 @@ def scenario_cells(out: Path, scenario: Scenario, estimators: dict[str, Estimato
             cells[name].time = runs_[0].time[:length]
             cells[name].errors = np.vstack([r.error[:length] for r in runs_])
             cells[name].h_std = np.vstack([r.h_std[:length] for r in runs_])
+            cells[name].startup_end = min(r.startup_end for r in runs_)
     return list(cells.values())
 
 

@@ -40,13 +40,13 @@ from pathlib import Path
 from typing import Any
 
 from altfusion.cosim.instances import fmu_info
-from altfusion.cosim.system import ComponentSpec, Metric, SystemSpec
 from altfusion.estimators.base import HEIGHT_SOURCES, Estimator
-from altfusion.montecarlo.evaluate_metrics import Fault
+from altfusion.evaluation.metrics import Fault
 from altfusion.montecarlo.source import CampaignError
 from altfusion.systems.catalog import build_system
 from altfusion.systems.error_models import SENSOR_ERRORS
 from altfusion.systems.sensors import SENSORS
+from altfusion.systems.spec import ComponentSpec, Metric, SystemSpec
 from altfusion.systems.wiring import EXTRA_SOURCES, SENSOR_OF_PREFIX, estimator_connections
 
 PAPER_ESTIMATOR = "estimator"
@@ -70,7 +70,7 @@ SOURCE_OF_SENSOR = {sensor: prefix for prefix, sensor in SENSOR_OF_PREFIX.items(
 """Signal prefix (source) of each sensor component."""
 
 REQUIRED_SOURCES: dict[str, dict[str, str]] = {
-    "XuSHAEKF": {"acc": "its process model is driven by the accelerometer (seed 004 eqs. "
+    "XuSHAEKF": {"acc": "its process model is driven by the accelerometer (xu2016 eqs. "
                         "10-11, 19: acc_z is the input u)"},
 }
 """Sources an estimator's algorithm cannot do without, and why; an estimator core class may

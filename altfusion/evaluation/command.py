@@ -4,6 +4,7 @@ HTML page and markdown (``docs/evaluation.md`` with ``--docs``)."""
 import argparse
 from pathlib import Path
 
+from altfusion.errors import UsageError
 from altfusion.montecarlo.commands import guarded
 
 DEFAULT_RUNS = 20
@@ -44,22 +45,25 @@ def _names(text: str | None) -> list[str] | None:
 
 def command_evaluate(args: argparse.Namespace) -> int:
     from altfusion.atomic import write_text
-    from altfusion.montecarlo.commands import INTERRUPTED, _report_outcome
-    from altfusion.montecarlo.evaluate_report import (
+    from altfusion.evaluation.report import (
         format_markdown,
         format_text,
         summary_json,
         write_html,
     )
-    from altfusion.montecarlo.evaluate_run import (
+    from altfusion.evaluation.run import (
         EvaluationSettings,
         evaluation_cells,
         plan_evaluation,
         run_evaluation,
         stored_runs,
     )
+    from altfusion.montecarlo.campaign_events import report_campaign_events
+    from altfusion.montecarlo.commands import INTERRUPTED, _report_outcome
     from altfusion.montecarlo.execution import Execution
 
+    if args.runs is not None and args.runs < 1:
+        raise UsageError(f"--runs {args.runs}: expected at least 1 run per scenario")
     out = Path(args.out)
     scenarios, estimators, fmu_paths = plan_evaluation(
         args.models, _names(args.estimators), _names(args.scenarios))
@@ -86,8 +90,10 @@ def command_evaluate(args: argparse.Namespace) -> int:
                               "no workers")}
     print()
     print(format_text(cells))
+    events = [report_campaign_events(out / s.name, s.name) for s, o in outcomes if o]
+    print("\n" + "\n".join(text for text, _path in events))
     markdown = format_markdown(cells, names, scenarios, record)
-    files = [write_text(out / "evaluation.md", markdown),
+    files = [*(path for _text, path in events), write_text(out / "evaluation.md", markdown),
              write_html(out / "evaluation.html", cells, names, scenarios, record),
              write_text(out / "evaluation_summary.json", summary_json(cells))]
     if args.docs:

@@ -19,9 +19,10 @@ replay runs them with noises from the logged sensors instead:
   launch site, so the offset to GPS altitude is unknown up to the QNH error (±25 hPa ≈ ±200 m;
   the Auterion log has -155 m). BaselineKF and Whang learn it as their bias state.
 * Whang's launch calibration (H0, T0) is taken at the log's start: H0 = the first valid GPS
-  altitude, T0 = the first baro temperature (:func:`launch_calibration`). With H0 = 0 (PX4's
-  QNH datum) the scale factor would act on a 430 m lever and turn the 1.5 K temperature noise
-  into ~2 m of height noise; from the start of the log it acts on the height flown. Its bias
+  altitude, T0 = the first baro temperature
+  (:func:`altfusion.replay.calibration.launch_calibration`). With H0 = 0 (PX4's QNH datum)
+  the scale factor would act on a 430 m lever and turn the 1.5 K temperature noise into ~2 m
+  of height noise; from the start of the log it acts on the height flown. Its bias
   random walk is (0.05 m)² per air-data step, and its alpha-beta process noise is that of a
   multicopter, not the paper's aircraft: Q_h = q_a Δt^B = 0.5 m²/s³ x 0.2 s = 0.1 m²/s² (q_a
   as BaselineKF's); with the paper's 39.69 m²/s² the rate state follows the baro noise
@@ -40,19 +41,9 @@ Estimators not listed run with their defaults.
 from dataclasses import dataclass, field
 from typing import Any
 
-import numpy as np
-
-from altfusion.constants import ISA_T0
-from altfusion.cosim.system import ComponentSpec, Connection, SystemSpec
-from altfusion.estimators.altitude_ekf import AltitudeEKF
-from altfusion.estimators.bao import BaoDriftEstimator
-from altfusion.estimators.baseline import BaselineKF
-from altfusion.estimators.hajiyev import HajiyevAdaptiveEstimator
-from altfusion.estimators.whang import WhangGAEstimator
-from altfusion.estimators.xu import XuSHAEKF
-from altfusion.estimators.yang import YangFusionKF
-from altfusion.replay.component import OUTPUT_NAMES
-from altfusion.replay.extract import FlightLog
+from altfusion.estimators.registry import ESTIMATOR_CLASSES
+from altfusion.signals import LOG_OUTPUTS
+from altfusion.systems.spec import ComponentSpec, Connection, SystemSpec
 
 REPLAY = "replay"
 """Name of the LogReplay component in every replay system."""
@@ -89,17 +80,6 @@ REPLAY_TUNING: dict[str, dict[str, Any]] = {
 }
 """Parameters of each estimator for replayed PX4 logs (see the module docstring)."""
 
-CATALOG_ESTIMATORS = {
-    "BaselineKF": BaselineKF,
-    "HajiyevAdaptiveEstimator": HajiyevAdaptiveEstimator,
-    "WhangGAEstimator": WhangGAEstimator,
-    "BaoDriftEstimator": BaoDriftEstimator,
-    "YangFusionKF": YangFusionKF,
-    "XuSHAEKF": XuSHAEKF,
-    "AltitudeEKF": AltitudeEKF,
-}
-"""The estimators of the catalog replay systems, by FMU model name."""
-
 @dataclass(frozen=True)
 class CatalogLog:
     """A bundled log (``resources/flightlogs/<file>`` of LogReplay.fmu) and what the catalog
@@ -109,7 +89,7 @@ class CatalogLog:
     stop_time: float
     """The log's duration rounded up to the step, s."""
     calibration: dict[str, float]
-    """:func:`launch_calibration` of the log (rounded)."""
+    """:func:`~altfusion.replay.calibration.launch_calibration` of the log (rounded)."""
     description: str
 
 
@@ -121,32 +101,6 @@ LOGS = {
         "pyulog_sample_px4_events.ulg", 31.14, {"H0": 488.005, "T0": 273.15, "terrain_h": 0.0},
         "PX4 SITL take-off and landing (pyulog sample): baro, GPS, accelerometer"),
 }
-
-
-def launch_calibration(log: FlightLog) -> dict[str, float]:
-    """What the log says of its datums: Whang's H0 and T0 at the log's start (the first valid
-    GPS altitude and the first baro temperature; PX4's own datum, 0 m and 288.15 K, if the log
-    has no GPS fix or no air data), and ``terrain_h``, the ground's altitude in the GPS datum
-    under the rangefinder: the median of GPS altitude minus rangefinder height (0 m if the log
-    lacks either)."""
-    gps, baro = log.stream("gps"), log.stream("baro")
-    if gps is None or baro is None or not len(baro) or gps.valid is None or not gps.valid.any():
-        return {"H0": 0.0, "T0": ISA_T0, "terrain_h": 0.0}
-    fixed = np.flatnonzero(gps.valid)
-    calibration = {"H0": float(gps.values["gps_h"][fixed[0]]),
-                   "T0": float(baro.values["baro_T"][0]), "terrain_h": 0.0}
-    for prefix in ("laser", "radar"):
-        ranger = log.stream(prefix)
-        if ranger is None or ranger.valid is None or not ranger.valid.any():
-            continue
-        span = (ranger.time >= gps.time[fixed[0]]) & (ranger.time <= gps.time[fixed[-1]])
-        seen = ranger.valid & span
-        if seen.any():
-            gps_at = np.interp(ranger.time[seen], gps.time[fixed], gps.values["gps_h"][fixed])
-            ground = gps_at - ranger.values[f"{prefix}_h"][seen]
-            calibration["terrain_h"] = float(np.median(ground))
-            break
-    return calibration
 
 
 TUNED_BY_CALIBRATION = {"WhangGAEstimator": ("H0", "T0"), "XuSHAEKF": ("terrain_h",),
@@ -180,7 +134,7 @@ def replay_system(name: str, log_file: str, stop_time: float,
     for entry in estimators:
         components.append(ComponentSpec(entry.fmu, entry.fmu, BASE_STEP, dict(entry.parameters)))
         for name_in in entry.inputs:
-            if name_in in OUTPUT_NAMES:
+            if name_in in LOG_OUTPUTS:
                 connections.append(Connection(f"{REPLAY}.{name_in}", f"{entry.fmu}.{name_in}"))
             else:
                 unconnected.setdefault(entry.fmu, []).append(name_in)
@@ -196,8 +150,8 @@ def catalog_replay(name: str) -> SystemSpec:
     log = LOGS[name]
     entries = [EstimatorEntry(fmu, core.declared_inputs(),
                               replay_tuning(fmu, log.calibration))
-               for fmu, core in CATALOG_ESTIMATORS.items()]
+               for fmu, core in ESTIMATOR_CLASSES.items()]
     spec, _ = replay_system(name, f"flightlogs/{log.file}", log.stop_time, entries,
-                            f"{log.description}; {', '.join(CATALOG_ESTIMATORS)} with replay "
+                            f"{log.description}; {', '.join(ESTIMATOR_CLASSES)} with replay "
                             f"tuning")
     return spec

@@ -1,0 +1,138 @@
+"""One aid source per sensor stream: what the estimator knows about that source's samples.
+
+PX4 EKF2 keeps one control unit per aiding source (``aid_sources/``: baro, GNSS, range
+height) and one status struct per source (``estimator_aid_source1d``: innovation, its
+variance, test ratio, fused or rejected, time of the last fusion). :class:`AidSource` is that
+struct here, with the bias-test window and the isolation state of the fault layer
+(:mod:`altfusion.estimators.fault_detection`). Gating a sample gives an explicit
+:class:`Verdict`.
+"""
+
+import math
+from collections import deque
+from enum import Enum
+
+from altfusion.estimators.health import HEIGHT_SOURCES, SourceBit, source_bit
+
+MAX_WINDOW_VALUE = 1e100
+"""Innovations and variances entering a bias window are clipped to this magnitude, so that
+its running sums stay finite."""
+
+
+class InnovationWindow:
+    """A height source's innovations y and their variances S over a span of time, with
+    running sums: the mean ȳ = Σy/n and its variance ΣS/n² (independent samples)."""
+
+    def __init__(self) -> None:
+        self.samples: deque[tuple[float, float, float]] = deque()
+        self.sum_y = 0.0
+        self.sum_S = 0.0
+        self.sigmas = math.inf
+        """The bias test's threshold for this source, set by each test (inf before)."""
+
+    @property
+    def n(self) -> int:
+        return len(self.samples)
+
+    def add(self, now: float, y: float, S: float, span: float) -> None:
+        """Add the sample (y, S) of time ``now`` and drop those older than ``span``."""
+        y = min(max(y, -MAX_WINDOW_VALUE), MAX_WINDOW_VALUE)
+        S = min(max(S, 0.0), MAX_WINDOW_VALUE)
+        self.samples.append((now, y, S))
+        self.sum_y += y
+        self.sum_S += S
+        while now - self.samples[0][0] > span:
+            _, old_y, old_S = self.samples.popleft()
+            self.sum_y -= old_y
+            self.sum_S -= old_S
+
+    def clear(self) -> None:
+        """Forget every sample (a re-referenced source starts its window anew)."""
+        self.samples.clear()
+        self.sum_y = self.sum_S = 0.0
+        self.sigmas = math.inf
+
+    def mean(self) -> float:
+        return self.sum_y / self.n
+
+    def mean_variance(self) -> float:
+        return max(self.sum_S, 0.0) / (self.n * self.n)
+
+    def one_sided(self, min_samples: int) -> bool:
+        """True if the window holds ``min_samples`` or more innovations, all of one sign (a
+        constant offset, not noise)."""
+        return self.n >= min_samples and (all(y > 0.0 for _, y, _ in self.samples)
+                                               or all(y < 0.0 for _, y, _ in self.samples))
+
+
+class Verdict(Enum):
+    """What became of a gated sample."""
+
+    FUSED = "fused"
+    """It passed its gate: the estimator fuses it."""
+    REJECTED = "rejected"
+    """It failed its gate (or its plausibility bound): counted, not fused."""
+    RESET = "reset"
+    """It failed its gate, and the estimator reset its state onto it (PX4's height or
+    velocity reset): consumed, not fused."""
+    REREFERENCED = "rereferenced"
+    """An isolated source with a constant offset: the estimator's offset state moved onto it
+    and the source re-admitted: consumed, not fused."""
+
+
+class AidSource:
+    """The state of one source (``baro``, ``gps``, ``radar``, ``laser``, ``gps_vz``,
+    ``acc``) of an estimator: its last sample's gating, its counters and its health."""
+
+    __slots__ = ("name", "height", "fused_mask", "rejected_mask", "isolated_mask",
+                 "test_ratio", "rejected", "innovation", "variance", "gate_width", "window",
+                 "last_fused", "rejected_since", "biased", "bits")
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+        self.height = name in HEIGHT_SOURCES
+        """A height source: its fusion keeps ``h_valid`` true; it can be isolated."""
+        self.fused_mask = source_bit(name, SourceBit.FUSED)
+        self.rejected_mask = source_bit(name, SourceBit.REJECTED)
+        self.isolated_mask = source_bit(name, SourceBit.ISOLATED)
+        self.test_ratio = 0.0
+        """y²/(g²·S) of the last gated sample (PX4's test ratio; > 1: rejected)."""
+        self.rejected = 0
+        """Samples rejected so far."""
+        self.innovation = 0.0
+        """Innovation y of the last gated sample."""
+        self.variance = 0.0
+        """Its variance S."""
+        self.gate_width = math.inf
+        """Half-width g·√S of the gate the last fused sample passed (inf: none yet)."""
+        self.window = InnovationWindow()
+        """The bias test's innovations over ``reset_timeout`` (fault layer)."""
+        self.last_fused = -math.inf
+        """Time of the last fusion that aided the height (height sources)."""
+        self.rejected_since: float | None = None
+        """Time of the first of the current run of rejections (None: last sample fused)."""
+        self.biased = False
+        """The last bias test found the source biased (the test's hysteresis)."""
+        self.bits = 0
+        """This source's bits of ``status``."""
+
+    @property
+    def isolated(self) -> bool:
+        """True while the source is isolated (declared faulty)."""
+        return bool(self.bits & self.isolated_mask)
+
+    def fused(self, now: float, aids_height: bool) -> None:
+        """A sample of this source is fused at ``now``; it aids the height if it is a height
+        source and ``aids_height``."""
+        self.rejected_since = None
+        self.bits = self.fused_mask
+        if aids_height and self.height:
+            self.last_fused = now
+
+    def refused(self) -> None:
+        """A sample of this source is rejected (counted); an isolated source stays so."""
+        self.rejected += 1
+        self.bits = self.rejected_mask | (self.bits & self.isolated_mask)
+
+    def isolate(self) -> None:
+        self.bits |= self.isolated_mask

@@ -1,0 +1,160 @@
+"""Sample intake: an estimator's stream inputs, new samples, held samples, plausibility.
+
+A measurement update happens exactly once per new sample (its count changed). A sample that
+is invalid (its validity flag false) or not finite is ignored and noted (``n_ignored``); a
+value beyond its plausibility bound (:data:`~.streams.PLAUSIBLE_RANGE`) is rejected as its
+source's.
+
+Time stamps. A sample stamped ahead of the estimator's clock is held until due: an engine
+that steps slow components first (ECOS) shows the estimator a 10 Hz GPS sample of t = 0.10 s
+at t = 0.01 s, and every engine then fuses it at the same instant up to one estimator step.
+A sample whose stamp cannot be the present one is refused, counted in ``<prefix>_rejected``
+(and ``n_rejected``), noted and flagged in ``status`` (``SAMPLE_REFUSED``) for the step:
+
+* from the future: stamped more than ``max_sample_lead`` ahead of the clock;
+* stale: stamped more than ``max_sample_delay`` behind the clock (a GNSS sample 10 s old
+  fused as if current would move the height by 10 s of climb);
+* out of order: stamped before the last sample taken from the same stream.
+
+Inputs outside any stream (``extra_inputs``) are read with :meth:`SampleIntake.held_input`.
+"""
+
+import math
+from typing import ClassVar
+
+from altfusion.estimators.health import STEP_BITS
+from altfusion.estimators.streams import Stream
+
+
+class SampleIntake:
+    """The intake half of :class:`~altfusion.estimators.base.Estimator` (a mixin: it uses
+    the component's clock, parameters, notes and the estimator's aid sources)."""
+
+    streams: ClassVar[tuple[Stream, ...]]
+    extra_inputs: ClassVar[tuple[str, ...]] = ()
+    """Real inputs outside any stream (no count), read with :meth:`held_input`."""
+
+    def declare_inputs(self) -> None:
+        """Every stream input and extra input at its default (before any is given)."""
+        for name in self.extra_inputs:
+            setattr(self, name, 0.0)
+        for stream in self.streams:
+            for name in stream.values:
+                setattr(self, name, 0.0)
+            setattr(self, stream.count, 0)
+            setattr(self, stream.time, 0.0)
+            if stream.valid:
+                setattr(self, stream.valid, True)
+
+    def reset_intake(self) -> None:
+        """Take the present counts as seen; no sample held; extra inputs held as given."""
+        self._last_count = {s.prefix: getattr(self, s.count) for s in self.streams}
+        self._seen = {prefix for prefix, count in self._last_count.items() if count > 0}
+        self._held: dict[str, dict[str, float]] = {}
+        """Samples stamped ahead of the clock, by stream prefix (a key of plain data: a
+        saved and restored state holds copies of the Stream constants, never the same ones)."""
+        self._last_stamp = dict.fromkeys(self._last_count, -math.inf)
+        """The stamp of the last sample taken from each stream, by prefix."""
+        self.n_ignored = 0
+        self._step_flags = 0
+        self._held_inputs: dict[str, float] = {}
+        self._bad_inputs: set[str] = set()
+        for name in self.extra_inputs:
+            value = float(getattr(self, name))
+            self._held_inputs[name] = value if math.isfinite(value) else 0.0
+
+    def due_samples(self) -> dict[Stream, dict[str, float]]:
+        """The samples to fuse in this step: the new ones not stamped ahead of the clock and
+        the held ones now due, by stream."""
+        samples = {}
+        last_count, held = self._last_count, self._held
+        for stream in self.streams:
+            count = getattr(self, stream.count)
+            if count != last_count[stream.prefix]:
+                sample = self._new_sample(stream, count)
+                if sample is not None:
+                    held[stream.prefix] = sample
+            if held:
+                sample = held.get(stream.prefix)
+                if sample is not None and self._due(sample[stream.time]):
+                    del held[stream.prefix]
+                    samples[stream] = sample
+        return samples
+
+    def _due(self, stamp: float) -> bool:
+        """True if a sample stamped ``stamp`` is not ahead of the clock (rounding aside)."""
+        now = self.time
+        return stamp <= now + 1e-9 * max(1.0, abs(now))
+
+    def _new_sample(self, stream: Stream, count: int) -> dict[str, float] | None:
+        """The sample of ``stream``, whose count changed to ``count``, if it is valid, finite,
+        plausible and stamped in time (module documentation), else None."""
+        prefix = stream.prefix
+        last = self._last_count[prefix]
+        self._last_count[prefix] = count
+        if count > last + 1:
+            self.note(f"{prefix}: {count - last - 1} sample(s) arrived between two "
+                      f"estimator steps; only the latest is fused")
+        if stream.valid and not getattr(self, stream.valid):
+            return None
+        sample = dict(zip(stream.fields, map(float, stream.read(self)), strict=True))
+        if not all(map(math.isfinite, sample.values())):
+            bad = {name: value for name, value in sample.items() if not math.isfinite(value)}
+            self._ignore(stream, f"non-finite sample ignored {bad}")
+            return None
+        stamp = sample[stream.time]
+        lead = stamp - self.time
+        if lead > self.params.max_sample_lead:
+            return self._refuse(stream, f"sample stamped {lead:.4g} s ahead of the clock (more "
+                                        f"than max_sample_lead) refused")
+        if -lead > self.params.max_sample_delay:
+            return self._refuse(stream, f"sample stamped {-lead:.4g} s behind the clock (more "
+                                        f"than max_sample_delay): stale, refused")
+        if stamp < self._last_stamp[prefix]:
+            return self._refuse(stream, f"sample stamped {stamp!r} s, before the stream's last "
+                                        f"sample ({self._last_stamp[prefix]!r} s): refused")
+        for name, source, bound in stream.bounds:
+            value = sample[name]
+            if abs(value) > bound:
+                self.refuse_implausible(self.aid[source], value, bound)
+                return None
+        if prefix in self._held:
+            self.note(f"{prefix}: a held sample was replaced before it was due")
+        if lead > 0.0:
+            self._step_flags |= STEP_BITS.SAMPLE_HELD
+        self._seen.add(prefix)
+        self._last_stamp[prefix] = stamp
+        return sample
+
+    def _refuse(self, stream: Stream, message: str) -> None:
+        """Refuse a sample of ``stream`` for its time stamp: counted in its source's
+        rejections, flagged and noted; returns None (no sample)."""
+        self.aid[stream.prefix].refused()
+        self.n_rejected += 1
+        self._step_flags |= STEP_BITS.SAMPLE_REFUSED
+        self.note(f"{stream.prefix}: {message}")
+
+    def _ignore(self, stream: Stream, message: str) -> None:
+        self.n_ignored += 1
+        self.note(f"{stream.prefix}: {message}")
+
+    def has_sample(self, prefix: str) -> bool:
+        """True once the stream ``prefix`` has delivered a valid sample (or had one at the
+        start): until then its input holds a placeholder, not a measurement."""
+        return prefix in self._seen
+
+    def held_input(self, name: str) -> float:
+        """The extra input ``name``, or its last finite value if it is not finite now.
+
+        A non-finite value counts in ``n_ignored``; the first of a run of them is noted."""
+        value = float(getattr(self, name))
+        held = self._held_inputs[name]
+        if math.isfinite(value):
+            self._held_inputs[name] = value
+            self._bad_inputs.discard(name)
+            return value
+        self.n_ignored += 1
+        if name not in self._bad_inputs:
+            self._bad_inputs.add(name)
+            self.note(f"{name}: non-finite sample ignored ({value}); holding {held!r}")
+        return held

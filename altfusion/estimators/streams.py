@@ -1,0 +1,94 @@
+"""Sensor streams: the inputs one sensor's samples arrive on, and the bounds of plausibility.
+
+A sensor stream is a group of inputs named by the signal contract: the held sample values,
+``<prefix>_count``, ``<prefix>_time`` (the sample's time stamp) and optionally a validity flag
+(``gps_fix``, ``radar_valid``...). A new sample is one whose count changed.
+"""
+
+from dataclasses import dataclass
+from functools import cached_property
+from operator import attrgetter
+
+from altfusion.estimators.health import HEIGHT_SOURCES, SOURCES
+
+
+@dataclass(frozen=True, eq=False)
+class Stream:
+    """The inputs of one sensor stream.
+
+    Streams are this module's constants and compare by identity: they key the per-step
+    sample dicts, where the built-in identity hash costs nothing (a field hash would run
+    Python code at every lookup)."""
+
+    prefix: str
+    values: tuple[str, ...]
+    valid: str | None = None
+
+    @cached_property
+    def count(self) -> str:
+        return f"{self.prefix}_count"
+
+    @cached_property
+    def time(self) -> str:
+        return f"{self.prefix}_time"
+
+    @cached_property
+    def fields(self) -> tuple[str, ...]:
+        """The inputs a sample carries: the values, then the time stamp."""
+        return (*self.values, self.time)
+
+    @cached_property
+    def read(self) -> attrgetter:
+        """The getter of a sample's :attr:`fields` from an object: a tuple of their values."""
+        return attrgetter(*self.fields)
+
+    @cached_property
+    def bounds(self) -> tuple[tuple[str, str, float], ...]:
+        """(input, source charged, bound) of each value with a :data:`PLAUSIBLE_RANGE`."""
+        return tuple((name, *PLAUSIBLE_RANGE[name]) for name in self.fields
+                     if name in PLAUSIBLE_RANGE)
+
+
+BARO = Stream("baro", ("baro_h",))
+BARO_T = Stream("baro", ("baro_h", "baro_T"))
+BARO_P = Stream("baro", ("baro_h", "baro_p"))
+GPS = Stream("gps", ("gps_h",), "gps_fix")
+GPS_QUALITY = Stream("gps", ("gps_h", "gps_vdop", "gps_nsat"), "gps_fix")
+GPS_VZ = Stream("gps", ("gps_h", "gps_vz"), "gps_fix")
+ACC = Stream("acc", ("acc_z",))
+RADAR = Stream("radar", ("radar_h",), "radar_valid")
+LASER = Stream("laser", ("laser_h",), "laser_valid")
+BARO_ALL = Stream("baro", ("baro_h", "baro_p", "baro_T"))
+GPS_ALL = Stream("gps", ("gps_h", "gps_vz", "gps_vdop", "gps_nsat"), "gps_fix")
+
+ACC_CLIP = 0.95 * 16.0 * 9.80665
+"""A vertical acceleration beyond 95 % of ±16 g (the full scale of common MEMS
+accelerometers) is a clipped reading (PX4's PX4Accelerometer counts a raw sample beyond 95 %
+of the range as clipping): the true acceleration lies somewhere beyond it, so the reading is
+no measurement of it."""
+
+PLAUSIBLE_RANGE = {"acc_z": ("acc", ACC_CLIP), "gps_vz": ("gps_vz", 1000.0),
+                   **{f"{source}_h": (source, 1e5) for source in HEIGHT_SOURCES}}
+"""Plausibility bounds of the sample values (source charged, largest magnitude): the
+accelerometer's clipping level :data:`ACC_CLIP`; 1000 m/s, about Mach 3; ±100 km of height,
+the Kármán line. A value beyond its bound cannot be a measurement: the sample is rejected as
+that source's (test ratio value²/bound²) and takes no part in the step."""
+
+
+def stream_inputs(streams: tuple[Stream, ...]) -> tuple[str, ...]:
+    """The input names of ``streams`` in declaration order: values, count, time stamp,
+    validity flag."""
+    names: list[str] = []
+    for stream in streams:
+        for name in (*stream.values, stream.count, stream.time,
+                     *((stream.valid,) if stream.valid else ())):
+            if name not in names:
+                names.append(name)
+    return tuple(names)
+
+
+def stream_sources(streams: tuple[Stream, ...]) -> tuple[str, ...]:
+    """The sources of ``streams`` in :data:`SOURCES` order: each stream's prefix, and
+    ``gps_vz`` for a stream carrying the GPS vertical speed."""
+    present = {s.prefix for s in streams} | {"gps_vz" for s in streams if "gps_vz" in s.values}
+    return tuple(source for source in SOURCES if source in present)
