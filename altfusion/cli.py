@@ -213,8 +213,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--fault", default=None, metavar="NAME",
                      help="apply fault scenario NAME of the fault suite (docs/faults.md)")
     run.add_argument("--record", choices=("timing",), default=None,
-                     help="timing: also record every sensor stream's count and stamp and "
-                          "the estimators' input counts, every base step (altfusion timing)")
+                     help="timing: also record every sensor stream's count, stamp and "
+                          "validity and the estimators' input counts, every base step "
+                          "(altfusion timing)")
     run.set_defaults(handler=command_run)
     replay = commands.add_parser(
         "replay", help="run estimators on a PX4 flight log (ULog), compare with PX4 EKF2")

@@ -6,12 +6,7 @@ accelerometer) to keep CI cheap; the checks are exact, so a short run judges as 
 one."""
 
 import csv
-import os
 import re
-import subprocess
-import sys
-import tarfile
-import zipfile
 from dataclasses import replace
 from fractions import Fraction
 from pathlib import Path
@@ -33,11 +28,6 @@ from altfusion.timing.streams import Consumer, sensor_streams
 
 STOP = 20.0
 STREAMS = ("air_data.baro", "gnss.gps", "accelerometer.acc", "radar.radar")
-OMSIMULATOR = next((folder / "shared" / "tools" / "omsimulator" for folder in
-                    Path(__file__).resolve().parents[1:]
-                    if (folder / "shared" / "tools" / "omsimulator").is_dir()), None)
-"""The prebuilt OMSimulator (its README says how to use it): ``shared/tools/omsimulator``
-beside the project's folder or one of its parents (a worktree's)."""
 
 
 def timing(argv: list[str], capsys) -> tuple[int, str, str]:
@@ -139,7 +129,8 @@ def test_a_result_without_counts_names_the_option_that_records_them(ssp_files, t
                               capsys)
     assert (status, out) == (2, "")
     assert err.startswith("error: the result records no sample count and stamp") and \
-        err.strip().endswith("run it with altfusion run --record timing")
+        err.strip().endswith("record them with altfusion run --record timing or altfusion "
+                             "timing SYSTEM.ssp --engine HOST --csv OUT.csv")
 
 
 def test_a_result_file_without_its_system_is_a_one_line_error(our_csv, capsys):
@@ -187,6 +178,25 @@ def test_the_relays_of_a_fault_system_are_followed_to_the_estimator(ssp_files):
     assert sorted(streams) == ["accelerometer.acc", "air_data.baro", "gnss.gps", "radar.radar"]
     assert streams["gnss.gps"].consumers == (
         Consumer("estimator", "gps_count", handover=0.02, relays=("fault",)),)
+
+
+def test_a_gnss_outage_is_told_from_lost_samples_by_its_fix(ssp_files, tmp_path, capsys):
+    """GnssReceiver's outage from 10 to 20 s: 100 instants without a new measurement while
+    gps_fix is false pass; the same rows claiming a fix are 100 samples missing."""
+    assert main(["run", str(ssp_files["sensors_yang2020"]), "--stop", "30", "--record",
+                 "timing", "--set", "gnss.outage_windows=10 20", "--out", str(tmp_path)]) == 0
+    capsys.readouterr()
+    csv_path, system = tmp_path / "sensors_yang2020.csv", ssp_files["sensors_yang2020"]
+    status, out, _ = timing([csv_path, "--system", system], capsys)
+    assert status == 0, out
+    assert cells(out, "gnss.gps", "no new measurement") == [
+        "no new measurement", "100 instants", "while gps_fix false", "ok"]
+    edited = _edited(csv_path, tmp_path / "fix.csv",
+                     lambda columns: columns["gnss.gps_fix"].fill(1.0))
+    status, out, _ = timing([edited, "--system", system], capsys)
+    assert status == 1
+    assert "gnss.gps: 100 samples missing while gps_fix was true: instant 10 s; " \
+           "instant 10.1 s" in out
 
 
 def _edited(source: Path, target: Path, edit) -> Path:
@@ -266,90 +276,16 @@ def test_a_result_in_omsimulators_layout_is_checked_as_ours(ssp_files, tmp_path,
 
 
 # ------------------------------------------------------------------------------ OMSimulator
-@pytest.fixture(scope="module")
-def omsimulator(tmp_path_factory) -> Path:
-    """OMSimulator's Python package folder, unpacked from the prebuilt archive; skips with
-    the reason if the archive is missing."""
-    archives = sorted(OMSIMULATOR.glob("omsimulator-*-linux64.tgz")) if OMSIMULATOR else []
-    if not archives:
-        pytest.skip("OMSimulator not found: no shared/tools/omsimulator/"
-                    "omsimulator-*-linux64.tgz beside the project or its parent folders")
-    folder = tmp_path_factory.mktemp("omsimulator")
-    with tarfile.open(archives[-1]) as archive:
-        archive.extractall(folder, filter="data")
-    return folder / "oms-install" / "lib" / "x86_64-linux-gnu"
-
-
-OMS_RUN = """
-import sys
-from OMSimulator import SSP
-model = SSP(sys.argv[1])
-instance = model.instantiate()
-instance.setResultFile(sys.argv[2])
-instance.setStopTime(float(sys.argv[3]))
-instance.setFixedStepSize(float(sys.argv[4]))
-instance.initialize(); instance.simulate(); instance.terminate(); instance.delete()
-"""
-
-
-def run_omsimulator(package: Path, ssp: Path, result: Path, stop: float, step: float) -> None:
-    """``ssp`` run in OMSimulator through its Python API, one step for every component."""
-    completed = subprocess.run(
-        [sys.executable, "-c", OMS_RUN, str(ssp), str(result), repr(stop), repr(step)],
-        env={**os.environ, "PYTHONPATH": str(package)}, capture_output=True,
-        text=True, timeout=600)
-    assert completed.returncode == 0 and result.is_file(), \
-        completed.stdout[-3000:] + completed.stderr[-3000:]
-
-
-def binary_step_system(source: Path, target: Path) -> Path:
-    """yang2020 with every step and period a power of two (step 2^-6 s; barometer 2^-5 s,
-    GNSS 2^-3 s, radio altimeter 2^-2 s), flown on the true altitude: OMSimulator's steps add
-    up exactly to these instants, so FMUs that refuse any other step run in it."""
-    loaded = read_ssp(source)
-    step = 2.0 ** -6
-    periods = {"air_data": 2 * step, "accelerometer": step, "gnss": 0.125, "radar": 0.25}
-    components = tuple(
-        replace(c, step_size=step, parameters={**c.parameters, "sample_period": periods[c.name]}
-                if c.name in periods else c.parameters)
-        for c in loaded.spec.components)
-    connections = tuple(c if not c.end.startswith("controller.") else
-                        replace(c, start=c.start.replace("estimator.h_est", "plant.h")
-                                .replace("estimator.vz_est", "plant.vz"))
-                        for c in loaded.spec.connections)
-    spec = replace(loaded.spec, name="yang2020_binary", components=components,
-                   connections=connections, base_step=step)
-    return write_ssp(spec, loaded.fmu_paths, target)
-
-
-def test_omsimulator_keeps_every_streams_timing_on_a_binary_step(
-        omsimulator, ssp_files, tmp_path, capsys):
-    ssp = binary_step_system(ssp_files["yang2020"], tmp_path / "yang2020_binary.ssp")
-    result = tmp_path / "yang2020_binary_oms.csv"
-    run_omsimulator(omsimulator, ssp, result, STOP, 2.0 ** -6)
-    assert result.read_text().startswith('"time","yang2020_binary.')
-    status, out, _ = timing([result, "--system", ssp], capsys)
+def test_omsimulator_keeps_yang2020s_timing(omsimulator, ssp_files, capsys):
+    """yang2020 as it is, in OMSimulator's Python API at one 0.01 s step for every component:
+    its result, in OMSimulator's layout, holds every stream's timing, the estimator seeing
+    each sample one step later (OMSimulator's master is of Jacobi type)."""
+    run = omsimulator.ssp(ssp_files["yang2020"], STOP, 0.01)
+    assert run.returncode == 0, run.describe()
+    assert run.result.read_text().startswith('"time","yang2020.')
+    status, out, _ = timing([run.result, "--system", ssp_files["yang2020"]], capsys)
     assert_every_stream_holds(status, out)
-    assert "(OMSimulator layout, 1281 rows" in out
+    assert "(OMSimulator layout, 2001 rows" in out
     assert cells(out, "gnss.gps", "estimator.gps_count") == [
-        "estimator.gps_count", "saw 159 of 160 (1 after the last row), latency 0.01562 s",
-        "<= 0.01562 s", "ok"]
-
-
-def _accepts_any_step(fmu: Path) -> bool:
-    with zipfile.ZipFile(fmu) as archive:
-        text = archive.read("modelDescription.xml").decode()
-    return 'canHandleVariableCommunicationStepSize="true"' in text
-
-
-def test_omsimulator_keeps_yang2020s_timing(omsimulator, ssp_files, fmus, tmp_path, capsys):
-    """yang2020 as it is, at OMSimulator's one 0.01 s step for every component."""
-    refusing = sorted(c.fmu for c in read_ssp(ssp_files["yang2020"]).spec.components
-                      if not _accepts_any_step(fmus[c.fmu]))
-    if refusing:
-        pytest.skip(f"OMSimulator cannot run yang2020 while {', '.join(refusing)} refuse a "
-                    f"step other than their step_size (issue 27, item 1)")
-    result = tmp_path / "yang2020_oms.csv"
-    run_omsimulator(omsimulator, ssp_files["yang2020"], result, STOP, 0.01)
-    status, out, _ = timing([result, "--system", ssp_files["yang2020"]], capsys)
-    assert_every_stream_holds(status, out)
+        "estimator.gps_count", "saw 199 of 200 (1 after the last row), latency 0.01 s",
+        "<= 0.01 s", "ok"]

@@ -15,9 +15,11 @@ ROWS_PER_SECOND = 100
 """Rows every 0.01 s (times n/100, as our runner computes them)."""
 
 
-def stream(period="0.1", offset="0", latency="0", step=0.1, handover=0.01) -> Stream:
+def stream(period="0.1", offset="0", latency="0", step=0.1, handover=0.01,
+           valid=None) -> Stream:
     return Stream("gnss", "GnssReceiver", "gps", Fraction(period), Fraction(offset),
-                  Fraction(latency), step, (Consumer("estimator", "gps_count", handover),))
+                  Fraction(latency), step, (Consumer("estimator", "gps_count", handover),),
+                  valid)
 
 
 def recorded(s: Stream, stop: float = 2.0, rows_per_second: int = ROWS_PER_SECOND,
@@ -25,7 +27,7 @@ def recorded(s: Stream, stop: float = 2.0, rows_per_second: int = ROWS_PER_SECON
     """Rows of a sensor keeping its schedule exactly, and a consumer whose count follows the
     sensor's ``seen_after_rows`` rows later."""
     time = np.arange(round(stop * rows_per_second) + 1) / rows_per_second
-    k = np.arange(1, round(stop / float(s.period)) + 1)
+    k = np.arange(0, round(stop / float(s.period)) + 1)
     instants = np.array([float(s.offset + i * s.period) for i in k])
     instants = instants[instants > 0]
     due = instants + float(s.latency)
@@ -95,18 +97,52 @@ def test_a_count_that_rises_without_a_new_stamp_counts_a_sample_twice():
     assert result.duplicated == 1
 
 
-def test_an_outage_skips_instants_without_a_violation():
-    s = stream()
+def outage(s: Stream, fix: bool | None) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """Rows in which the samples of 0.6 .. 1.0 s are not taken, ``gnss.gps_fix`` recorded
+    ``fix`` meanwhile (None: not recorded)."""
     time, columns = recorded(s)
     count, stamp = columns[s.count_column], columns[s.time_column]
-    hold = (time >= 0.6) & (time < 1.1)          # samples of 0.6 .. 1.0 s not taken
+    hold = (time >= 0.6) & (time < 1.1)
     count[hold] = count[time == 0.5][0]
     stamp[hold] = 0.5
     count[time >= 1.1] -= 5
     columns["estimator.gps_count"] = count.copy()
-    result = check_stream(s, time, columns)
+    if fix is not None:
+        columns["gnss.gps_fix"] = np.where(hold, float(fix), 1.0)
+    return time, columns
+
+
+def test_an_outage_skips_instants_while_the_fix_is_lost():
+    s = stream(valid="gps_fix")
+    result = check_stream(s, *outage(s, fix=False))
     assert result.ok, result.violations
     assert (result.expected, result.seen, result.gaps) == (20, 15, 5)
+
+
+def test_instants_skipped_with_a_valid_fix_are_missing_samples():
+    s = stream(valid="gps_fix")
+    result = check_stream(s, *outage(s, fix=True))
+    assert kinds(result) == {"samples missing while gps_fix was true"}
+    assert result.violations[0].count == 5
+
+
+def test_a_sensor_without_a_validity_output_must_take_every_sample():
+    s = stream()
+    assert kinds(check_stream(s, *outage(s, fix=None))) == {
+        "samples missing (GnssReceiver takes every sample: it has no validity output)"}
+    unjudged = check_stream(stream(valid="gps_fix"), *outage(s, fix=None))
+    assert unjudged.ok and "record gnss.gps_fix" in unjudged.notes[0]
+
+
+def test_a_count_that_stops_before_the_last_row_is_missing_samples():
+    """A host that failed after its first steps and wrote a last row at the stop time."""
+    s = stream()
+    time, columns = recorded(s)
+    rows = np.r_[0:11, time.size - 1]
+    stopped = {name: np.r_[values[:11], values[10]] for name, values in columns.items()}
+    result = check_stream(s, time[rows], stopped)
+    assert result.violations[0].kind.startswith("samples missing")
+    assert result.violations[0].count == 19
 
 
 def test_several_samples_in_one_coarse_row_are_counted_not_lost():

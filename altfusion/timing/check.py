@@ -10,7 +10,9 @@ contains that time; its ``<prefix>_count`` rises by the number of samples delive
   sample to the next); a row whose count rises by n holds the last of n samples, whose
   instants are the stamp and the n - 1 instants before it (a count that rises by more than
   the instants since the previous stamp counts samples twice: duplicated; instants skipped
-  by a rise of fewer are samples without a new measurement, e.g. a GNSS outage);
+  by a rise of fewer, or after the last stamp, are samples without a new measurement: allowed
+  only while the sensor's validity output says its measurement is invalid, e.g. a GNSS
+  outage, and never for a sensor without one);
 * each sample first shows in the row at or after its due time, and no later than the row at
   or after the end of the sensor step that contains it (early: before it was due, which is
   also before it was taken when there is no latency; late or lost: after);
@@ -166,9 +168,10 @@ def _row_at_or_after(time: np.ndarray, t: np.ndarray) -> np.ndarray:
 
 
 def _samples(result: StreamResult, schedule: Schedule, time: np.ndarray, count: np.ndarray,
-             stamp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(instant index, row time first showing it) of every sample the count took; checks
-    the count and the stamps on the way."""
+             stamp: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(instant index, row time first showing it) of every sample the count took, and the
+    indices of the instants due by the last row that it skipped; checks the count and the
+    stamps on the way."""
     name = result.stream.name
     rise = np.diff(count)
     result.violate("count decreases", [f"{count[i]:g} -> {count[i + 1]:g} at {time[i + 1]:g} s"
@@ -197,11 +200,38 @@ def _samples(result: StreamResult, schedule: Schedule, time: np.ndarray, count: 
                    "the previous stamp)",
                    [f"+{n} at {time[i]:g} s, stamp {stamp[i]:.9g} s, {max(m, 0)} new instants"
                     for i, n, m in zip(rows[twice], taken[twice], spanned[twice], strict=True)])
-    result.gaps = int((spanned - taken)[~twice].sum())
+    skipped = [np.arange(k0 + 1, k - n + 1) for k0, k, n in
+               zip(previous, nearest, taken, strict=True) if k - n > k0]
     indices = np.concatenate([np.arange(k - n + 1, k + 1) for k, n in
                               zip(nearest, taken, strict=True)]) if rows.size else np.array([], int)
     shown = np.repeat(time[rows], taken)
-    return indices.astype(np.int64), shown
+    last = int(nearest[-1]) if rows.size else schedule.first_index() - 1
+    skipped.append(np.arange(last + 1, schedule.last_due_index(float(time[-1])) + 1))
+    return indices.astype(np.int64), shown, np.concatenate(skipped).astype(np.int64)
+
+
+def _judge_skipped(result: StreamResult, schedule: Schedule, time: np.ndarray,
+                   skipped: np.ndarray, valid: np.ndarray | None) -> None:
+    """Instants without a sample: a sensor without a validity output must take every one; one
+    with it may skip those at which its measurement was invalid (an outage, out of range),
+    judged in the row by which the sample was due."""
+    result.gaps = int(skipped.size)
+    if not skipped.size:
+        return
+    instants = schedule.instant(skipped)
+    due_rows = np.searchsorted(time, schedule.delivered_by(
+        instants + float(schedule.latency)) - TIME_TOLERANCE, side="left")
+    stream = result.stream
+    if stream.valid is None:
+        result.violate(f"samples missing ({stream.fmu} takes every sample: it has no "
+                       f"validity output)", [f"instant {t:.9g} s" for t in instants])
+    elif valid is None:
+        result.notes.append(f"{skipped.size} instants without a new measurement, not judged: "
+                            f"record {stream.valid_column} to tell outages from lost samples")
+    else:
+        lost = valid[np.minimum(due_rows, time.size - 1)] != 0
+        result.violate(f"samples missing while {stream.valid} was true",
+                       [f"instant {t:.9g} s" for t in instants[lost]])
 
 
 def check_stream(stream: Stream, time: np.ndarray, columns: dict[str, np.ndarray],
@@ -228,7 +258,8 @@ def check_stream(stream: Stream, time: np.ndarray, columns: dict[str, np.ndarray
     result.expected = max(schedule.last_due_index(float(time[-1])) - schedule.first_index() + 1,
                           0)
     result.seen = int(count[-1] - count[0])
-    indices, shown = _samples(result, schedule, time, count, stamp)
+    indices, shown, skipped = _samples(result, schedule, time, count, stamp)
+    _judge_skipped(result, schedule, time, skipped, other.get(stream.valid_column))
     instants = schedule.instant(indices)
     due = instants + float(stream.latency)
     early = shown < due - TIME_TOLERANCE

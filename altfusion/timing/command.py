@@ -63,7 +63,8 @@ def check_table(streams: tuple[Stream, ...], table: ResultTable,
     if not any(result.recorded for result in results):
         names = ", ".join(s.count_column for s in streams)
         raise UsageError(f"the result records no sample count and stamp of the system's "
-                         f"streams ({names}): run it with altfusion run --record timing")
+                         f"streams ({names}): record them with altfusion run --record timing "
+                         f"or altfusion timing SYSTEM.ssp --engine HOST --csv OUT.csv")
     return results
 
 

@@ -25,7 +25,9 @@ def _rows(result: StreamResult) -> list[tuple[str, str, str, str]]:
     """(check, measured, allowed, verdict) rows of one stream's table."""
     rows = [
         ("samples expected / seen", f"{result.expected} / {result.seen}", "", ""),
-        ("no new measurement", f"{result.gaps} instants", "(outages, invalid)", ""),
+        ("no new measurement", f"{result.gaps} instants",
+         f"while {result.stream.valid} false" if result.stream.valid else "0",
+         _verdict(any(v.kind.startswith("samples missing") for v in result.violations))),
         ("counted twice", str(result.duplicated), "0", _verdict(result.duplicated)),
         ("shown before due", str(result.early), "0", _verdict(result.early)),
         ("late or lost", str(result.late), "0", _verdict(result.late)),

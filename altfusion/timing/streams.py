@@ -52,6 +52,9 @@ class Stream:
     step: float
     """The component's communication step in the system, s (its SSP step size hint)."""
     consumers: tuple[Consumer, ...] = ()
+    valid: str | None = None
+    """The output saying whether the measurement is valid (``<prefix>_valid``, ``gps_fix``);
+    None for a sensor that takes every sample (barometer, accelerometer)."""
 
     @property
     def name(self) -> str:
@@ -65,9 +68,15 @@ class Stream:
     def time_column(self) -> str:
         return f"{self.component}.{self.prefix}_time"
 
+    @property
+    def valid_column(self) -> str | None:
+        return f"{self.component}.{self.valid}" if self.valid else None
+
     def columns(self) -> tuple[str, ...]:
-        """Every signal the check reads: count, stamp and each consumer's count."""
-        return (self.count_column, self.time_column, *(c.column for c in self.consumers))
+        """Every signal the check reads: count, stamp, validity and each consumer's count."""
+        valid = (self.valid_column,) if self.valid_column else ()
+        return (self.count_column, self.time_column, *valid,
+                *(c.column for c in self.consumers))
 
 
 @dataclass(frozen=True)
@@ -103,10 +112,12 @@ def sensor_streams(system: SystemSpec, fmu_paths: dict[str, Path]) -> tuple[Stre
             prefix = output.removesuffix("_count")
             if prefix == output or f"{prefix}_time" not in model.outputs:
                 continue
+            valid = next((name for name in (f"{prefix}_valid", f"{prefix}_fix")
+                          if name in model.outputs), None)
             streams.append(Stream(
                 component.name, component.fmu, prefix, schedule["sample_period"],
                 schedule["sample_offset"], schedule["latency"], component.step_size,
-                _consumers(system, models, f"{component.name}.{output}", output)))
+                _consumers(system, models, f"{component.name}.{output}", output), valid))
     if not streams:
         raise UsageError(f"system {system.name} has no sensor stream (no component with a "
                          f"sample_period parameter and <prefix>_count/<prefix>_time outputs)")
