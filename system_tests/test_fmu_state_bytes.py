@@ -86,6 +86,21 @@ BAD_STATES = {
 }
 
 
+def saved_state_and_continuation(harness: Harness):
+    """After 20 steps of ``harness``: its serialized state, and a function that steps
+    CONTINUATION more from there (the harness's own inputs rewound to the same point)."""
+    for _ in range(20):
+        harness.step()
+    good = harness.instance.fmu.serializeFMUstate(harness.instance.get_state())
+    rng_state, n, counts = harness.rng.bit_generator.state, harness.n, dict(harness.counts)
+
+    def continuation():
+        harness.rng.bit_generator.state = rng_state
+        harness.n, harness.counts = n, dict(counts)
+        return [harness.step() for _ in range(CONTINUATION)]
+    return good, continuation
+
+
 @pytest.mark.parametrize("kind", BAD_STATES)
 def test_a_bad_state_is_refused_runs_nothing_and_leaves_the_instance_usable(fmus, tmp_path,
                                                                             kind):
@@ -93,15 +108,7 @@ def test_a_bad_state_is_refused_runs_nothing_and_leaves_the_instance_usable(fmus
     marker = tmp_path / "payload_ran"
     harness = Harness(fmus["BaselineKF"], TUNING["BaselineKF"], seed=4)
     try:
-        for _ in range(20):
-            harness.step()
-        good = harness.instance.fmu.serializeFMUstate(harness.instance.get_state())
-        rng_state, n, counts = harness.rng.bit_generator.state, harness.n, dict(harness.counts)
-
-        def continuation():
-            harness.rng.bit_generator.state = rng_state
-            harness.n, harness.counts = n, dict(counts)
-            return [harness.step() for _ in range(CONTINUATION)]
+        good, continuation = saved_state_and_continuation(harness)
 
         first = continuation()
         instance = harness.instance
@@ -159,15 +166,7 @@ def test_a_state_with_a_wrongly_typed_field_is_refused_at_set_state(fmus, name, 
     field); the instance keeps its state and steps on as if nothing happened."""
     harness = Harness(fmus["BaselineKF"], TUNING["BaselineKF"], seed=4)
     try:
-        for _ in range(20):
-            harness.step()
-        good = harness.instance.fmu.serializeFMUstate(harness.instance.get_state())
-        rng_state, n, counts = harness.rng.bit_generator.state, harness.n, dict(harness.counts)
-
-        def continuation():
-            harness.rng.bit_generator.state = rng_state
-            harness.n, harness.counts = n, dict(counts)
-            return [harness.step() for _ in range(CONTINUATION)]
+        good, continuation = saved_state_and_continuation(harness)
 
         instance = harness.instance
         bad = instance.fmu.deSerializeFMUstate(with_field(good, name, value))
