@@ -6,7 +6,6 @@ processes: every recorded array of every run, and the evaluation's table and sum
 import json
 import subprocess
 import sys
-import time
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -15,15 +14,13 @@ import pytest
 
 pytest.importorskip("distributed", reason="the 'cluster' extra (distributed) is not installed")
 
+from dask_cluster import dask_cluster  # noqa: E402
+
 from altfusion.montecarlo.storage import finished_runs, read_run  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 MODELS = ROOT / "models"
-DASK = Path(sys.executable).with_name("dask")
 WORKERS = 2
-START_TIMEOUT = 120.0
-"""Seconds the scheduler and the workers get to start (spawned processes importing numpy and
-altfusion on a busy machine)."""
 
 
 def cli(*args: str) -> subprocess.CompletedProcess:
@@ -33,52 +30,12 @@ def cli(*args: str) -> subprocess.CompletedProcess:
     return completed
 
 
-def scheduler_address(scheduler_file: Path, scheduler: subprocess.Popen) -> str:
-    """The address the scheduler writes to its scheduler file once it listens."""
-    deadline = time.monotonic() + START_TIMEOUT
-    while True:
-        assert scheduler.poll() is None, "dask scheduler exited"
-        if scheduler_file.exists():
-            try:
-                return json.loads(scheduler_file.read_text())["address"]
-            except (ValueError, KeyError):
-                pass                                    # being written
-        assert time.monotonic() < deadline, "dask scheduler did not start"
-        time.sleep(0.2)
-
-
 @pytest.fixture(scope="module")
 def cluster(fmus, tmp_path_factory) -> Iterator[str]:
-    """``dask scheduler --host 127.0.0.1 --port 0`` and two ``dask worker`` processes; the
-    scheduler's address once both workers have joined. Stops the processes it started."""
-    from distributed import Client
-
-    folder = tmp_path_factory.mktemp("dask")
-    scheduler_file = folder / "scheduler.json"
-    with open(folder / "cluster.log", "w") as log:
-        started = [subprocess.Popen(
-            [str(DASK), "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
-             "--scheduler-file", str(scheduler_file)], stdout=log, stderr=subprocess.STDOUT)]
-        try:
-            address = scheduler_address(scheduler_file, started[0])
-            assert address.startswith("tcp://127.0.0.1:")
-            for index in range(WORKERS):
-                started.append(subprocess.Popen(
-                    [str(DASK), "worker", address, "--host", "127.0.0.1", "--nworkers", "1",
-                     "--nthreads", "1", "--no-dashboard", "--name", f"worker-{index}"],
-                    stdout=log, stderr=subprocess.STDOUT, cwd=folder))
-            with Client(address, timeout="30s") as client:
-                client.wait_for_workers(WORKERS, timeout=START_TIMEOUT)
-            yield address
-        finally:
-            for process in reversed(started):
-                process.terminate()
-            for process in reversed(started):
-                try:
-                    process.wait(timeout=30)
-                except subprocess.TimeoutExpired:
-                    process.kill()
-                    process.wait()
+    """A scheduler and two workers on 127.0.0.1 (:func:`dask_cluster.dask_cluster`)."""
+    with dask_cluster(tmp_path_factory.mktemp("dask"), WORKERS) as address:
+        assert address.startswith("tcp://127.0.0.1:")
+        yield address
 
 
 def assert_same_runs(folder: Path, reference: Path, runs: int) -> None:

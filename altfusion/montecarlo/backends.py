@@ -77,22 +77,26 @@ class DaskCluster:
         workers = len(self._client.scheduler_info().get("workers", {}))
         self.description = f"Dask scheduler {address} ({workers} workers)"
         self._session = uuid.uuid4().hex[:8]
-        self._futures: list[Any] = []
+        self._futures: set[Any] = set()
 
     def submit(self, task: CampaignTask, index: int) -> Any:
         future = self._client.submit(execute_run, task, index, pure=False, retries=0,
                                      key=f"altfusion-run-{self._session}-{index:05d}")
-        self._futures.append(future)
+        self._futures.add(future)
         return future
 
     def as_completed(self, futures: Iterable[Any]) -> Iterator[Any]:
+        """The futures as they complete; each is forgotten here once handed out (the
+        scheduler frees a result nobody holds)."""
         from distributed import as_completed as dask_as_completed
 
-        return iter(dask_as_completed(list(futures), loop=self._client.loop))
+        for future in dask_as_completed(list(futures), loop=self._client.loop):
+            self._futures.discard(future)
+            yield future
 
     def close(self, cancel: bool) -> None:
         if cancel and self._futures:
-            self._client.cancel(self._futures)
+            self._client.cancel(list(self._futures))
         self._client.close()
 
 

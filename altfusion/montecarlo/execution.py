@@ -152,7 +152,9 @@ def _execute(task: CampaignTask, out: Path, todo: list[int], outcome: CampaignOu
             future = backend.submit(task, index)
             futures[id(future)] = (future, index)
         for future in backend.as_completed(f for f, _ in futures.values()):
-            index = futures[id(future)][1]
+            # Keep no reference to a finished run's future: its result (every recorded
+            # signal) is freed once written, so memory does not grow with the runs.
+            index = futures.pop(id(future))[1]
             try:
                 record = future.result()
             except BrokenExecutor:
