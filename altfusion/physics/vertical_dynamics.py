@@ -36,7 +36,7 @@ class VerticalDynamicsParams:
     mass: float = param(
         1.5, "kg", "Vehicle mass. At least 1 g (a micro air vehicle): the controller's thrust "
         "(N) on a lighter mass accelerates beyond any floating-point state (1e-300 kg: "
-        "1e301 m/s2)", min=0.001,
+        "1e301 m/s2)", positive=True, min=0.001,
     )
     drag_coefficient: float = param(
         0.05, "kg/m", "Quadratic drag coefficient c: drag force = -c vz |vz|", min=0.0
