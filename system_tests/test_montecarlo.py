@@ -17,6 +17,7 @@ import pytest
 
 from altfusion.cosim import write_ssp
 from altfusion.montecarlo.aggregation import aggregate
+from altfusion.montecarlo.backends import WorkerPool
 from altfusion.montecarlo.execution import CampaignSettings, Execution, run_campaign
 from altfusion.montecarlo.source import CampaignError, SystemSource
 from altfusion.montecarlo.storage import finished_runs, read_manifest, read_run, run_path
@@ -106,6 +107,30 @@ def test_two_workers_and_a_dask_cluster_give_the_same_numbers_as_one_worker(
         assert_same_runs(tmp_path / folder, reference)
         assert statistics_json(aggregate(tmp_path / folder)) == \
             statistics_json(aggregate(reference))
+
+
+def test_campaigns_on_a_kept_worker_pool_give_each_its_own_numbers(gusty_ssp, reference,
+                                                                  tmp_path):
+    """A reproduction's campaigns share two worker processes (WorkerPool): a campaign with
+    parameter overrides, then one without, run in the same processes on the same cached
+    simulations, and the second gives the reference campaign's numbers (an override of the
+    first does not outlive its runs)."""
+    source = SystemSource.from_path(gusty_ssp)
+    pool = WorkerPool(2)
+    execution = Execution(workers=2, progress=False, pool=pool)
+    try:
+        calm = run_campaign(source, tmp_path / "calm", CampaignSettings(
+            RUNS, parameters={"atmosphere.wind_mean": 0.0, "atmosphere.gust_std": 0.0}),
+            execution)
+        again = run_campaign(source, tmp_path / "again", CampaignSettings(RUNS), execution)
+    finally:
+        pool.close()
+    assert calm.complete and again.complete
+    workers = {read_run(tmp_path / folder, i).worker for folder in ("calm", "again")
+               for i in range(RUNS)}
+    assert len(workers) == 2
+    assert not np.any(read_run(tmp_path / "calm", 0).results["atmosphere.wind_speed"])
+    assert_same_runs(tmp_path / "again", reference)
 
 
 def test_a_single_run_re_run_alone_gives_the_same_numbers(gusty_ssp, reference):

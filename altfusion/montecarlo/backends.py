@@ -100,11 +100,46 @@ class DaskCluster:
         self._client.close()
 
 
+def local_worker_count(workers: int | None, runs: int) -> int:
+    """Local worker processes for ``runs`` runs: ``workers`` (default: one per available
+    core), at most one per run."""
+    if workers is not None and workers < 1:
+        raise CampaignError(f"--workers must be >= 1, got {workers}")
+    return min(workers or available_cores(), runs)
+
+
 def open_backend(task: CampaignTask, workers: int | None, scheduler: str | None, runs: int):
     """Local worker processes (default: one per available core, at most one per run), or the
     Dask cluster at ``scheduler``."""
     if scheduler:
         return DaskCluster(scheduler)
-    if workers is not None and workers < 1:
-        raise CampaignError(f"--workers must be >= 1, got {workers}")
-    return LocalWorkers(task, min(workers or available_cores(), runs))
+    return LocalWorkers(task, local_worker_count(workers, runs))
+
+
+class WorkerPool:
+    """Local worker processes kept from one campaign to the next (a reproduction's
+    campaigns): started for the first campaign's runs, closed by :meth:`close`. Each worker
+    keeps one simulation per system (:func:`~altfusion.montecarlo.worker.simulation_for`), so
+    campaigns on the same SSP reuse its FMU instances, as the runs of one campaign do; a
+    campaign whose runs were cancelled (interrupted, failing) closes the processes and the
+    next campaign starts new ones."""
+
+    def __init__(self, workers: int | None):
+        self.workers = workers
+        self._backend: LocalWorkers | None = None
+
+    def backend(self, task: CampaignTask, runs: int) -> LocalWorkers:
+        """The pool's workers, started for ``task`` and ``runs`` runs if none run."""
+        if self._backend is None:
+            self._backend = LocalWorkers(task, local_worker_count(self.workers, runs))
+        return self._backend
+
+    def release(self, cancel: bool) -> None:
+        """End of a campaign: keep the workers, or with ``cancel`` stop them."""
+        if cancel:
+            self.close(cancel=True)
+
+    def close(self, cancel: bool = False) -> None:
+        if self._backend is not None:
+            self._backend.close(cancel)
+            self._backend = None

@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from altfusion.cosim.instances import CosimError
-from altfusion.montecarlo.backends import open_backend
+from altfusion.montecarlo.backends import WorkerPool, open_backend
 from altfusion.montecarlo.campaign import CampaignTask, build_manifest, check_resumable, plan
 from altfusion.montecarlo.progress import Progress
 from altfusion.montecarlo.source import CampaignError, SystemSource
@@ -57,11 +57,14 @@ class CampaignSettings:
 @dataclass(frozen=True)
 class Execution:
     """How runs are executed: local worker processes (default: every available core) or the
-    Dask scheduler at ``scheduler``; whether to draw a progress line on stderr."""
+    Dask scheduler at ``scheduler``; whether to draw a progress line on stderr. With a
+    ``pool`` (and no scheduler) the local workers are the pool's, kept after the campaign
+    for the next one (:class:`~altfusion.montecarlo.backends.WorkerPool`)."""
 
     workers: int | None = None
     scheduler: str | None = None
     progress: bool = True
+    pool: WorkerPool | None = None
 
 
 @dataclass
@@ -143,7 +146,9 @@ def _describe(error: BaseException) -> str:
 
 def _execute(task: CampaignTask, out: Path, todo: list[int], outcome: CampaignOutcome,
              execution: Execution) -> CampaignOutcome:
-    backend = open_backend(task, execution.workers, execution.scheduler, len(todo))
+    pool = execution.pool if execution.scheduler is None else None
+    backend = pool.backend(task, len(todo)) if pool is not None else \
+        open_backend(task, execution.workers, execution.scheduler, len(todo))
     progress = Progress(outcome.runs, outcome.runs - len(todo), enabled=execution.progress)
     stopped, executed, succeeded, failures, clean = None, 0, 0, 0, False
     try:
@@ -180,5 +185,8 @@ def _execute(task: CampaignTask, out: Path, todo: list[int], outcome: CampaignOu
         stopped = "interrupted"
     finally:
         progress.close()
-        backend.close(cancel=not clean)
+        if pool is not None:
+            pool.release(cancel=not clean)
+        else:
+            backend.close(cancel=not clean)
     return replace(outcome, executed=executed, stopped=stopped, backend=backend.description)

@@ -34,6 +34,7 @@ from altfusion.cosim.results import Results
 from altfusion.cosim.runner import simulate
 from altfusion.cosim.ssp import read_ssp
 from altfusion.estimators.registry import ESTIMATOR_CLASSES
+from altfusion.montecarlo.backends import WorkerPool
 from altfusion.montecarlo.execution import CampaignSettings, Execution, run_campaign
 from altfusion.montecarlo.seeds import run_seeds, seeded_components
 from altfusion.montecarlo.source import CampaignError, SystemSource
@@ -94,7 +95,17 @@ def run_campaigns(campaigns: tuple[Campaign, ...], options: ReproduceOptions,
     """Run every campaign, or with ``options.resume`` complete those already started; the
     exit status: 0 when every campaign is complete, 130 if interrupted, 1 if runs failed or a
     worker died, 2 if a campaign cannot start (its message printed)."""
-    execution = Execution(options.workers, options.scheduler, progress=True)
+    pool = WorkerPool(options.workers)
+    try:
+        return _run_each(campaigns, options, default_runs,
+                         Execution(options.workers, options.scheduler, True, pool))
+    finally:
+        pool.close()
+
+
+def _run_each(campaigns: tuple[Campaign, ...], options: ReproduceOptions, default_runs: int,
+              execution: Execution) -> int:
+    """:func:`run_campaigns` on ``execution``, one campaign after the other."""
     for campaign in campaigns:
         out = Path(options.out) / campaign.folder
         resume = options.resume and has_manifest(out)
