@@ -17,6 +17,15 @@ Rates: the alpha-beta filter and the random walks propagate at the estimator's o
 noises, given per air-data step Δt^B, are scaled by dt/Δt^B); with the estimator stepped at
 Δt^B this is exactly the paper's filter.
 
+With ``fault_detection`` false this is the estimator, in the methods that carry the paper's
+equation numbers: :meth:`WhangGAEstimator._time_update` (eqs. 17-18, 33),
+:meth:`WhangGAEstimator._measurement_update` with ``_lambda_update`` (eqs. 6-7, 19-22),
+``_gps_update`` and ``_z_update`` (eqs. 23-31), ``_compensate``, ``_compensated`` and
+``_alpha_beta_update`` (eqs. 32-34); none of them tests ``fault_detection``: only
+:meth:`WhangGAEstimator.propagate` (time update) and :meth:`WhangGAEstimator.fuse_samples`
+(measurement updates, then ``_publish``) do, each once per step, choosing the paper's method
+or the fault layer's around it. The deviations below are in the paper's methods.
+
 Deviations from the paper:
 
 * Sign of λ (docs/papers.md): a warmer day than the calibration makes the barometer read low,
@@ -32,7 +41,11 @@ Deviations from the paper:
   except while the baro is rejected (the fault layer's baro gate below).
 
 The fault layer (``fault_detection`` true; the estimate is the paper's without it), not in
-the paper; ``docs/estimators.md`` gives the cases behind it:
+the paper, composed around the paper's methods: :meth:`WhangGAEstimator._time_update_with_error`
+and :meth:`WhangGAEstimator._measurement_update_with_baro_gate` with ``_gate_baro``,
+``_gps_height_update``, ``_compensate_with_error``, ``_error_update``, ``_interval``,
+``_samples_per_calibration``, ``reset_height`` and ``reset_offset`` (section ``fault layer``
+of the class); ``docs/estimators.md`` gives the cases behind it:
 
 * baro gate: the compensated height h^c (eq. 32, with the calibration â, b̂ before this
   step's z-update) against the alpha-beta prediction ĥ_{k|k-1} of eq. (33),
@@ -113,6 +126,8 @@ class WhangGAEstimator(Estimator):
         self._Q = np.array([[0.0, 0.0], [0.0, p.Q_h * (dt / p.adm_period)]])
 
     def initialize_filter(self) -> None:
+        """The paper's initial state, then the fault layer's (its error covariance and its
+        record of sample intervals and of the baro's verdict)."""
         p = self.params
         self.a, self.P_a = 0.0, p.P0_a
         self.b, self.P_b = 0.0, p.P0_b
@@ -126,63 +141,49 @@ class WhangGAEstimator(Estimator):
         self.lambda_meas = 0.0
         self.baro = float(self.baro_h)
         self._baro_rejected = False
-        self._publish()
+        self._publish(self.P)
+
+    # -------------------------------------------------------------- dispatch
+    def propagate(self, dt: float) -> None:
+        """The paper's time update, or the fault layer's around it."""
+        if self.params.fault_detection:
+            self._time_update_with_error(dt)
+        else:
+            self._time_update(dt)
+
+    def fuse_samples(self, samples) -> None:
+        """The paper's measurement updates, or the fault layer's around them; then the
+        outputs, ``h_std`` from the paper's P or from the fault layer's error covariance."""
+        air_data, gps = samples.get(BARO_T), samples.get(GPS)
+        if self.params.fault_detection:
+            self._measurement_update_with_baro_gate(air_data, gps)
+            self._publish(self.P_error)
+        else:
+            self._measurement_update(air_data, gps)
+            self._publish(self.P)
 
     # -------------------------------------------------------------- time update
-    def propagate(self, dt: float) -> None:
+    def _time_update(self, dt: float) -> None:
+        """Eqs. (17)-(18), the random walks, and eq. (33), the alpha-beta prediction."""
         p = self.params
         scale = dt / p.adm_period
         self.P_a += p.Q_a * scale                                               # (17)
         self.P_b += p.Q_b * scale                                               # (18)
         if self.started:
-            self.x, self.P = predict(self.x, self.P, self._F, self._Q)
-            if p.fault_detection:
-                self.P_error = predict(self.x, self.P_error, self._F, self._Q)[1]
+            self.x, self.P = predict(self.x, self.P, self._F, self._Q)          # (33)
         self.h_prior = float(self.x[0])
 
     # -------------------------------------------------------------- measurements
-    def fuse_samples(self, samples) -> None:
-        """Air data: λ-update; GPS: z-update; then compensation with the latest estimates.
-        With ``fault_detection`` the baro height is gated first: while it is rejected the
-        GPS aids the height instead of calibrating the baro (module documentation)."""
-        air_data, gps = samples.get(BARO_T), samples.get(GPS)
-        for name, sample in (("baro", air_data), ("gps", gps)):
-            if sample is not None:
-                self._interval(name, sample[f"{name}_time"])
+    def _measurement_update(self, air_data, gps) -> None:
+        """Air data: λ-update; GPS: z-update; then compensation with the latest estimates."""
         if air_data is not None:
             self._lambda_update(air_data["baro_T"])
-            self._baro_rejected = not self._gate_baro(air_data["baro_h"])
-            if not self._baro_rejected:
-                self.baro = air_data["baro_h"]
-        if gps is not None and not self.has_sample("baro"):
-            self.note("gps: sample before the first air-data sample not fused (z = h^B - "
-                      "h^GPS needs h^B)")
-        elif gps is not None and self._baro_rejected:
-            self._gps_height_update(gps["gps_h"])
-        elif gps is not None:
-            self._z_update(gps["gps_h"])
-        if air_data is not None and not self._baro_rejected:
-            self._compensate()
-        self._publish()
-
-    def _gate_baro(self, h_baro: float) -> bool:
-        """True if the baro height may be fused: without ``fault_detection`` always (the
-        paper); with it, its compensated height (eq. 32, the calibration before this
-        step's z-update) against the alpha-beta prediction, S = P⁻_hh + R_h (eq. 34)."""
-        if not (self.params.fault_detection and self.started):
             self.accept(self.aid["baro"])
-            return True
-        h_comp, R_h = self._compensated(h_baro)
-        return self.gate(self.aid["baro"], h_comp - self.h_prior, self.P_error[0, 0] + R_h,
-                         self.params.gate_sigma) is Verdict.FUSED
-
-    def _gps_height_update(self, h_gps: float) -> None:
-        """The GPS height fused into the alpha-beta filter (eq. 34 with R^GPS) while the baro
-        is rejected (``fault_detection`` only): z = h^B - h^GPS has no valid h^B then."""
-        R = self.params.R_gps
-        if self.gate(self.aid["gps"], h_gps - self.h_prior, self.P_error[0, 0] + R,
-                     self.params.gate_sigma) is Verdict.FUSED:
-            self._alpha_beta_update(h_gps, R, R)
+            self.baro = air_data["baro_h"]
+        if gps is not None:
+            self._gps_update(gps["gps_h"])
+        if air_data is not None:
+            self._compensate()
 
     def _lambda_update(self, temperature: float) -> None:
         """Eqs. (6), (7), (19)-(22): scale factor from the ADM temperature."""
@@ -195,6 +196,14 @@ class WhangGAEstimator(Estimator):
         result = update(np.array([self.a]), np.array([[self.P_a]]), self.lambda_meas, ONE,
                         variance)                                               # (20)-(22)
         self.a, self.P_a = float(result.x[0]), float(result.P[0, 0])
+
+    def _gps_update(self, h_gps: float) -> None:
+        """The z-update (eqs. 23-31), once an air-data sample gives h^B (a deviation)."""
+        if not self.has_sample("baro"):
+            self.note("gps: sample before the first air-data sample not fused (z = h^B - "
+                      "h^GPS needs h^B)")
+            return
+        self._z_update(h_gps)
 
     def _z_update(self, h_gps: float) -> None:
         """Eqs. (23)-(31): scale factor and bias from z = h^B - h^GPS."""
@@ -225,27 +234,92 @@ class WhangGAEstimator(Estimator):
                / (1.0 + self.a) ** 2)
         return h_comp, R_h
 
-    def _compensate(self) -> None:
-        """Eq. (32) and the alpha-beta filter update (eq. 34) with its R_h."""
+    def _compensate(self) -> tuple[float, np.ndarray | None]:
+        """Eq. (32) and the alpha-beta filter update (eq. 34) with its R_h; the filter starts
+        at the first compensated height. Returns R_h and the gain K of eq. (34) (None at
+        the start)."""
         self.h_comp, R_h = self._compensated(self.baro)
         if not self.started:
             self.x = np.array([self.h_comp, 0.0])
-            if self.params.fault_detection:
-                self.P_error = np.diag([R_h, self.P[1, 1]])
             self.started = True
+            return R_h, None
+        return R_h, self._alpha_beta_update(self.h_comp, R_h)
+
+    def _alpha_beta_update(self, z: float, R: float) -> np.ndarray:
+        """Eq. (34): the alpha-beta filter updated by the height z of variance R; returns
+        its gain K."""
+        result = update(self.x, self.P, z, H_ALPHA_BETA, R)
+        self.x, self.P = result.x, result.P
+        return result.K
+
+    def _publish(self, P: np.ndarray) -> None:
+        """The outputs, ``h_std`` from the covariance ``P``."""
+        self.h_est = float(self.x[0])
+        self.vz_est = float(self.x[1])
+        self.h_std = float(np.sqrt(P[0, 0]))
+        self.scale_factor, self.bias = self.a, self.b
+        self.scale_factor_var, self.bias_var = self.P_a, self.P_b
+
+    # -------------------------------------------------------------- fault layer
+    def _time_update_with_error(self, dt: float) -> None:
+        """The paper's time update, and that of the error covariance of ``h_std``."""
+        self._time_update(dt)
+        if self.started:
+            self.P_error = predict(self.x, self.P_error, self._F, self._Q)[1]
+
+    def _measurement_update_with_baro_gate(self, air_data, gps) -> None:
+        """The paper's measurement updates with the baro height gated first: while it is
+        rejected the GPS aids the height instead of calibrating the baro, and the last
+        accepted h^B is held (module documentation)."""
+        for name, sample in (("baro", air_data), ("gps", gps)):
+            if sample is not None:
+                self._interval(name, sample[f"{name}_time"])
+        if air_data is not None:
+            self._lambda_update(air_data["baro_T"])
+            self._baro_rejected = not self._gate_baro(air_data["baro_h"])
+            if not self._baro_rejected:
+                self.baro = air_data["baro_h"]
+        if gps is not None and self._baro_rejected:
+            self._gps_height_update(gps["gps_h"])
+        elif gps is not None:
+            self._gps_update(gps["gps_h"])
+        if air_data is not None and not self._baro_rejected:
+            self._compensate_with_error()
+
+    def _gate_baro(self, h_baro: float) -> bool:
+        """True if the baro height may be fused (always before the filter starts): its
+        compensated height (eq. 32, the calibration before this step's z-update) against
+        the alpha-beta prediction, S = P⁻_hh + R_h (eq. 34)."""
+        if not self.started:
+            self.accept(self.aid["baro"])
+            return True
+        h_comp, R_h = self._compensated(h_baro)
+        return self.gate(self.aid["baro"], h_comp - self.h_prior, self.P_error[0, 0] + R_h,
+                         self.params.gate_sigma) is Verdict.FUSED
+
+    def _gps_height_update(self, h_gps: float) -> None:
+        """The GPS height fused into the alpha-beta filter (eq. 34 with R^GPS) while the baro
+        is rejected: z = h^B - h^GPS has no valid h^B then."""
+        R = self.params.R_gps
+        if self.gate(self.aid["gps"], h_gps - self.h_prior, self.P_error[0, 0] + R,
+                     self.params.gate_sigma) is Verdict.FUSED:
+            self._error_update(self._alpha_beta_update(h_gps, R), R)
+
+    def _compensate_with_error(self) -> None:
+        """The paper's compensation and alpha-beta update, and the error covariance of
+        ``h_std``: from the first sample's R_h, then updated under R^B' + N·C."""
+        R_h, gain = self._compensate()
+        if gain is None:
+            self.P_error = np.diag([R_h, self.P[1, 1]])
             return
         white = self.params.R_baro / (1.0 + self.a) ** 2
         shared = self._samples_per_calibration() * (R_h - white)
-        self._alpha_beta_update(self.h_comp, R_h, white + shared)
+        self._error_update(gain, white + shared)
 
-    def _alpha_beta_update(self, z: float, R: float, R_error: float) -> None:
-        """Eq. (34): the alpha-beta filter updated by the height z of variance R; with
-        ``fault_detection`` also the error covariance of ``h_std`` under the variance
-        ``R_error`` that z's error truly has for this gain (Joseph form)."""
-        result = update(self.x, self.P, z, H_ALPHA_BETA, R)
-        self.x, self.P = result.x, result.P
-        if self.params.fault_detection:
-            self.P_error = joseph(self.P_error, result.K, H_ALPHA_BETA, R_error)
+    def _error_update(self, gain: np.ndarray, R_error: float) -> None:
+        """The error covariance of ``h_std`` after the alpha-beta update of gain ``gain``,
+        under the variance ``R_error`` that the height's error truly has (Joseph form)."""
+        self.P_error = joseph(self.P_error, gain, H_ALPHA_BETA, R_error)
 
     def _interval(self, name: str, stamp: float) -> None:
         """Record the interval between the last two samples of ``name`` (positive only)."""
@@ -277,11 +351,3 @@ class WhangGAEstimator(Estimator):
         scale = 1.0 + self.a
         self.b, self.P_b = self.b + scale * innovation, scale**2 * variance
         return True
-
-    def _publish(self) -> None:
-        self.h_est = float(self.x[0])
-        self.vz_est = float(self.x[1])
-        P = self.P_error if self.params.fault_detection else self.P
-        self.h_std = float(np.sqrt(P[0, 0]))
-        self.scale_factor, self.bias = self.a, self.b
-        self.scale_factor_var, self.bias_var = self.P_a, self.P_b
