@@ -19,6 +19,13 @@ Multi-rate: the fusion runs when a new GPS sample arrives, with the latest baro 
 between GPS samples the estimate follows each new baro sample with the last correction K·Δ
 held. The algorithm estimates no vertical speed: ``vz_est`` is always 0.
 
+With ``fault_detection`` false this is the estimator, with the deviations below:
+:meth:`HajiyevAdaptiveEstimator.fuse` (h_B and Δ of eq. 18),
+:meth:`~HajiyevAdaptiveEstimator._fuse_gps` (eqs. 15-19, 26-31, 34),
+:meth:`~HajiyevAdaptiveEstimator._baro_sample`, :meth:`~HajiyevAdaptiveEstimator.propagate`
+and the GPS gate :meth:`~HajiyevAdaptiveEstimator._gate_residual`; ``fuse`` is this module's
+one test of ``fault_detection``, choosing the GPS gate.
+
 Deviations from the paper:
 
 * between GPS samples the variance grows by ``drift_psd`` per second, so that ``h_std`` stays
@@ -37,9 +44,23 @@ Deviations from the paper:
   (outliers are jumps, while the drift the adaptation follows is gradual; a gate on Δ itself
   would reject that drift). A jump gate cannot isolate a GPS step: the first stepped sample
   inside it (204 m with the fault flight's noises) becomes the reference and the innovations
-  the bias test averages (estimators/base.py) are jumps again, zero-mean. With
-  ``fault_detection`` Δ̄ is the Kalman estimate of Δ's mean, modelled as the random walk of
-  PSD ``drift_psd`` that the baro drift is (hajiyev: about 1 m/s, a walk of 1 m²/s at its
+  the bias test averages (estimators/base.py) are jumps again, zero-mean;
+* baro gate: a baro sample that jumps from the last accepted one by more than ``gate_sigma``
+  standard deviations of the jump (2 R_B and ``max_vz``) is rejected;
+* GPS samples that arrive before the first baro sample are not fused (eq. 18 needs h_B; in a
+  replayed log GPS may come first).
+
+The fault layer (``fault_detection`` true), not in the paper: the GPS gate
+:meth:`~HajiyevAdaptiveEstimator._gate_residual_on_reference` in place of
+:meth:`~HajiyevAdaptiveEstimator._gate_residual`,
+:meth:`~HajiyevAdaptiveEstimator._fall_back` and
+:meth:`~HajiyevAdaptiveEstimator.reset_height` (called by the fault layer of
+estimators/gating.py only); both gates share
+:meth:`~HajiyevAdaptiveEstimator._residual_passes` and
+:meth:`~HajiyevAdaptiveEstimator._set_reference`:
+
+* with ``fault_detection`` Δ̄ is the Kalman estimate of Δ's mean, modelled as the random walk
+  of PSD ``drift_psd`` that the baro drift is (hajiyev: about 1 m/s, a walk of 1 m²/s at its
   1 s samples, error_models.HAJIYEV_DRIFT_RATE) measured with variance R_B + R_GPS. Its
   innovations are white with exactly the variance passed, as the bias test assumes; its
   steady-state gain is about √(drift_psd·T/(R_B + R_GPS)) at a GPS period T (0.06 at seed
@@ -58,14 +79,9 @@ Deviations from the paper:
   sample (eq. 15) may carry the fault (the adaptive gain of eqs. 27, 30 is about 0.9 for a
   100 m residual), while Δ̄ is the baro's offset from the GPS level that the accepted
   samples give; a rejected outlier leaves the held correction;
-* baro gate: a baro sample that jumps from the last accepted one by more than ``gate_sigma``
-  standard deviations of the jump (2 R_B and ``max_vz``) is rejected;
-* GPS samples that arrive before the first baro sample are not fused (eq. 18 needs h_B; in a
-  replayed log GPS may come first);
 * health (estimators/base.py): a baro that stays off for ``reset_timeout`` while the GPS
-  agrees is isolated, and so is a GPS whose innovations against Δ̄ stay biased (with
-  ``fault_detection``; the estimate then stays h_B + Δ̄); with no source fused for that long
-  the estimate resets.
+  agrees is isolated, and so is a GPS whose innovations against Δ̄ stay biased (the
+  estimate then stays h_B + Δ̄); with no source fused for that long the estimate resets.
 """
 
 from dataclasses import dataclass
@@ -131,7 +147,9 @@ class HajiyevAdaptiveEstimator(Estimator):
         self._publish()
 
     def fuse(self, stream: Stream, sample: dict[str, float]) -> None:
-        p = self.params
+        """A baro sample is h_B (eq. 18); a GPS sample is gated on its residual Δ (the one
+        dispatch on ``fault_detection``: :meth:`_gate_residual`, else the fault layer's
+        :meth:`_gate_residual_on_reference`) and fused (:meth:`_fuse_gps`)."""
         if stream is BARO:
             self._baro_sample(sample["baro_h"], sample["baro_time"])
             return
@@ -139,13 +157,22 @@ class HajiyevAdaptiveEstimator(Estimator):
             self.note("gps: sample before the first baro sample not fused (no h_B for eq. 18)")
             return
         residual = sample["gps_h"] - self.baro                                  # (18)
-        if not self._gate_residual(residual):
-            return
+        if self.params.fault_detection:
+            accepted = self._gate_residual_on_reference(residual)
+        else:
+            accepted = self._gate_residual(residual)
+        if accepted:
+            self._fuse_gps(sample["gps_h"], residual)
+
+    def _fuse_gps(self, h_gps: float, residual: float) -> None:
+        """Eqs. (15)-(19) with the adaptive factor of eqs. (26)-(31): the Kalman update of the
+        prior h_B (variance S·R_B) by h^GPS (variance R_GPS); K·Δ held until the next fusion."""
+        p = self.params
         factor = 1.0
         if p.adaptive and residual**2 >= p.R_gps + p.R_baro:                     # (28)
             factor = (residual**2 - p.R_gps) / p.R_baro                         # (30)
         result = update(np.array([self.baro]), np.array([[factor * p.R_baro]]),
-                        sample["gps_h"], H, p.R_gps)                            # (27), (31)
+                        h_gps, H, p.R_gps)                                      # (27), (31)
         self.adaptive_factor = factor
         self.gain = float(result.K[0, 0])
         self.residual = residual
@@ -176,31 +203,37 @@ class HajiyevAdaptiveEstimator(Estimator):
         self._publish()
 
     def _gate_residual(self, residual: float) -> bool:
-        """Gate the GPS on the innovation of its residual Δ against the reference Δ̄, variance
-        P̄ + R_B + R_GPS, and update Δ̄ with an accepted Δ: True if the sample may be fused.
-        The first residual, also the first after a height reset, is accepted and becomes Δ̄
-        (P̄ = R_B + R_GPS).
-        Without ``fault_detection`` Δ̄ is the last accepted residual (the gate is on Δ's jump);
-        with it Δ̄ is the Kalman estimate of a random walk of PSD ``drift_psd`` measured by Δ
-        with variance R_B + R_GPS (its innovations are white with exactly that variance, as
-        the bias test assumes)."""
-        p = self.params
-        noise = p.R_baro + p.R_gps
-        reference, gain = residual, 1.0
-        if self._reference is not None:
-            prior = self._reference_variance
-            if p.fault_detection:
-                prior += p.drift_psd * (self.time - self._reference_time)
-            verdict = self.gate(self.aid["gps"], residual - self._reference, prior + noise,
-                                p.gate_sigma)
-            if verdict is not Verdict.FUSED:
-                self._fall_back(prior)
-                return False
-            if p.fault_detection:
-                gain = prior / (prior + noise)
-                reference = self._reference + gain * (residual - self._reference)
-        self._reference, self._reference_variance = reference, gain * noise
-        self._reference_time = self.time
+        """The GPS gate (an addition to the paper): the innovation of the residual Δ against
+        the last accepted residual Δ̄ (a gate on Δ's jump), variance P̄ + R_B + R_GPS with
+        P̄ = R_B + R_GPS; an accepted Δ becomes Δ̄. True if the sample may be fused. The first
+        residual, also the first after a height reset, is accepted and becomes Δ̄."""
+        if self._reference is not None and not self._residual_passes(
+                residual, self._reference_variance):
+            return False
+        self._set_reference(residual, self._residual_noise())
+        return True
+
+    # ------------------------------------------------------------------ fault layer
+    def _gate_residual_on_reference(self, residual: float) -> bool:
+        """The GPS gate with ``fault_detection``: Δ̄ is the Kalman estimate of a random walk of
+        PSD ``drift_psd`` measured by Δ with variance R_B + R_GPS (its innovations are white
+        with exactly that variance, as the bias test assumes); the innovation of Δ against it
+        is gated with variance P̄ + R_B + R_GPS (P̄ the walk's prior variance) and an accepted
+        Δ updates Δ̄. True if the sample may be fused. The first residual, also the first
+        after a height reset, is accepted and becomes Δ̄ (P̄ = R_B + R_GPS); a rejected one
+        may make the estimate fall back (:meth:`_fall_back`)."""
+        noise = self._residual_noise()
+        if self._reference is None:
+            self._set_reference(residual, noise)
+            return True
+        prior = self._reference_variance
+        prior += self.params.drift_psd * (self.time - self._reference_time)
+        if not self._residual_passes(residual, prior):
+            self._fall_back(prior)
+            return False
+        gain = prior / (prior + noise)
+        self._set_reference(self._reference + gain * (residual - self._reference),
+                            gain * noise)
         return True
 
     def _fall_back(self, prior: float) -> None:
@@ -224,7 +257,24 @@ class HajiyevAdaptiveEstimator(Estimator):
         self._reference = None
         self._publish()
 
+    # ------------------------------------------------------------------ shared
+    def _residual_noise(self) -> float:
+        """R_B + R_GPS: the variance of the residual Δ (the threshold of condition 28)."""
+        return self.params.R_baro + self.params.R_gps
+
+    def _residual_passes(self, residual: float, prior: float) -> bool:
+        """The GPS gate: Δ - Δ̄ against ``prior`` (P̄) + R_B + R_GPS in ``gate_sigma``."""
+        return self.gate(self.aid["gps"], residual - self._reference,
+                         prior + self._residual_noise(),
+                         self.params.gate_sigma) is Verdict.FUSED
+
+    def _set_reference(self, reference: float, variance: float) -> None:
+        """The residual reference Δ̄ and its variance P̄ after an accepted residual, now."""
+        self._reference, self._reference_variance = reference, variance
+        self._reference_time = self.time
+
     def _publish(self) -> None:
+        """ĥ = h_B + K·Δ (eq. 15, the correction K·Δ held between GPS fusions)."""
         self.h_est = self.baro + self.correction
         self.vz_est = 0.0
         self.h_std = float(np.sqrt(self.variance))
