@@ -177,13 +177,11 @@ class BaoDriftEstimator(Estimator):
         self._publish()
 
     def propagate(self, dt: float) -> None:
-        """Eq. (12): X(k+1) = X(k) + W(k), F = G = [1], Q = σ²·dt; plus the motion of a
-        held baro height (module documentation, deviations)."""
-        p = self.params
-        Q = p.drift_psd * dt
-        if self.started and p.fault_detection:
-            stale = max(0.0, self.time - self._baro_accepted - p.reset_timeout)
-            Q += (p.max_vz * stale) ** 2 - (p.max_vz * max(0.0, stale - dt)) ** 2
+        """Eq. (12): X(k+1) = X(k) + W(k), F = G = [1], Q = σ²·dt; with ``fault_detection``
+        plus the motion of a held baro height (:meth:`_held_baro_motion`)."""
+        Q = self.params.drift_psd * dt                                          # (12)
+        if self.started and self.params.fault_detection:
+            Q += self._held_baro_motion(dt)
         self.x, self.P = predict(self.x, self.P, ONE, np.array([[Q]]))
         self._publish()
 
@@ -243,6 +241,15 @@ class BaoDriftEstimator(Estimator):
         self.x, self.P = result.x, result.P
         self.R, self.gps_std = R, math.sqrt(R)
         self.innovation = innovation
+
+    # ------------------------------------------------------------------ fault layer
+    def _held_baro_motion(self, dt: float) -> float:
+        """The drift state's variance gain over ``dt`` from a held baro height (module
+        documentation, deviations): (max_vz·t)² grows with t, the time beyond
+        ``reset_timeout`` since the last accepted baro sample."""
+        p = self.params
+        stale = max(0.0, self.time - self._baro_accepted - p.reset_timeout)
+        return (p.max_vz * stale) ** 2 - (p.max_vz * max(0.0, stale - dt)) ** 2
 
     def reset_height(self, source: str, innovation: float, variance: float) -> None:
         """A baro reset takes the new baro level; a GPS reset moves the drift estimate."""
