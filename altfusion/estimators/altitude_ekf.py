@@ -116,8 +116,8 @@ class AltitudeEKFParams(HealthParams):
                                          "it, GNSS gets the offset) or range (the terrain "
                                          "under the first range sample is the datum: held "
                                          "constant)")
-    laser_max_height: float = param(25.0, "m", "The laser is fused below this range (seed "
-                                               "004: 25 m)", positive=True)
+    laser_max_height: float = param(25.0, "m", "The laser is fused below this range (xu2016: "
+                                               "25 m)", positive=True)
     radar_max_height: float = param(5000.0, "m", "The radio altimeter is fused below this "
                                                  "range", positive=True)
     range_hysteresis: float = param(1.0, "m", "A rangefinder switched off above its "

@@ -50,7 +50,7 @@ def _subtitle(statistics: CampaignStatistics, bands: bool = True) -> str:
 
 def plot_rms_versus_time(statistics: CampaignStatistics, path: Path,
                          series: list[tuple[str, MetricStatistics]] | None = None) -> Path:
-    """RMS error over runs versus time, one panel per unit, chi-square band (seed 000 Fig. 3),
+    """RMS error over runs versus time, one panel per unit, chi-square band (whang2008 Fig. 3),
     on a log axis: estimators whose errors differ a thousandfold stay readable side by side.
 
     ``series`` (label, metric statistics) overrides the campaign's own metrics, e.g. to
