@@ -1,6 +1,7 @@
 """XuSHAEKF (xu2016) on synthetic data: the hover simulations of Section 3.1, the error bounds
 of Section 3.2, source switching, the adaptive parts and the choice of γ."""
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -19,7 +20,9 @@ class Scene:
     σ 5 mm, valid 0.1-25 m above the terrain (reads 0 otherwise); MEMS baro 50 Hz, σ 0.5 m,
     1.5 m constant error; GPS 5 Hz, σ 3 m; accelerometer 100 Hz, σ 0.05 m/s², bias 0.03 m/s².
     A GPS failure makes the GPS read 20 m high with σ 10 m from ``gps_failure_at`` on; the
-    accelerometer bias jumps by 0.5 m/s² at ``acc_bias_jump_at``."""
+    accelerometer bias jumps by 0.5 m/s² at ``acc_bias_jump_at``. Before ``frozen_until`` every
+    sensor repeats its noise-free reading (frozen sensors); ``start_h`` is the profile's start
+    height."""
 
     profile: str
     duration: float
@@ -30,12 +33,16 @@ class Scene:
     laser_failure: tuple[float, float] | None = None
     terrain_step_at: float | None = None
     acc_bias_jump_at: float | None = None
+    start_h: float = 0.0
+    frozen_until: float | None = None
 
 
-def fly(scene: Scene, params: XuParams | None = None, seed: int = 1):
-    """Errors of h_est at every step, the true heights and the estimator at the end."""
+def fly(scene: Scene, params: XuParams | None = None, seed: int = 1,
+        on_step: Callable[[XuSHAEKF], None] | None = None):
+    """Errors of h_est at every step, the true heights and the estimator at the end;
+    ``on_step`` is called with the estimator after each step."""
     rng = np.random.default_rng(seed)
-    profile = make_profile(scene.profile)
+    profile = make_profile(scene.profile, scene.start_h)
     estimator = XuSHAEKF(params, step_size=scene.step)
     feeder = StreamFeeder(estimator)
     steps = round(scene.duration / scene.step)
@@ -45,6 +52,8 @@ def fly(scene: Scene, params: XuParams | None = None, seed: int = 1):
         t = scene.step * (k + 1)
         h, _, az = profile.reference(t)
         noise = rng.standard_normal(4)
+        if scene.frozen_until is not None and t < scene.frozen_until:
+            noise[:] = 0.0
         terrain = 2.0 if scene.terrain_step_at is not None and t >= scene.terrain_step_at else 0.0
         laser_ok = 0.1 <= h - terrain <= 25.0
         if scene.laser_failure is not None:
@@ -65,6 +74,8 @@ def fly(scene: Scene, params: XuParams | None = None, seed: int = 1):
             samples["gps"] = {"gps_h": gps}
         feeder.step(**samples)
         errors[k], heights[k] = estimator.h_est - h, h
+        if on_step is not None:
+            on_step(estimator)
     return errors, heights, estimator
 
 
@@ -229,3 +240,40 @@ def test_samples_equal_to_the_prediction_do_not_divide_by_zero():
     for _ in range(300):
         feeder.step(acc={"acc_z": 0.0}, baro={"baro_h": 100.0}, gps={"gps_h": 100.0})
     assert estimator.h_est == 100.0 and estimator.weight_baro == 1.0
+
+
+@pytest.mark.parametrize(("height", "bound"), [(15.0, 1.0), (35.0, 1.2)])
+def test_a_minute_of_frozen_sensors_does_not_lock_out_the_sensors_when_noise_resumes(height,
+                                                                                     bound):
+    """Issue 29: hovering at 15 m (laser) and 35 m (baro), every sensor repeats its noise-free
+    reading for 60 s, then the ordinary noises resume for 60 s. Identical samples used to drive
+    every R̂ of eq. (22) toward 0 (after the 60 s: laser 6·10⁻¹³ m², GPS 0.005 m² at 15 m;
+    baro 10⁻⁵ m², GPS 0.017 m² at 35 m); when the noise resumed the gates rejected the
+    healthy GPS (189 and 67 of its 300 samples; with seeds 2-5 runs of rejections up to 18 s,
+    isolated) and the active source, the error reached 382 m and 1.6 m and |e| ≤ 2 h_std held
+    13 % and 46 % of the time. R̂ ≥ R/4 (``NOISE_FLOOR``) bounds this: a healthy GPS sample
+    then fails the 6σ gate only beyond 3 of its true σ (0.27 %) and its 5σ bias test beyond
+    2.5 (1.2 %), about 4 of 300 samples in the worst case (R̂ at the floor all minute), so
+    ≤ 15 (5 %) are asserted, and never a run of rejections as long as ``reset_timeout``
+    (2.5 s, 13 samples at 5 Hz), the least that isolates a source. From 10 s after the noise
+    resumed the error keeps Section 3.2's bound (1 m at or below 25 m, 1.2 m above), and
+    |e| ≤ 2 h_std holds at least 80 % of the minute: 95.4 % for a consistent filter, but the
+    error is correlated over seconds (ε_b and the bias learn from the 5 Hz GPS), so with about
+    20 independent samples in the minute the fraction's spread is about 5 %, and 80 % is 3 of
+    it below. (Measured: no GPS rejection, 0.02 m and 0.6 m, 96 % and 100 %.)"""
+    scene = Scene("hold", 120.0, start_h=height, frozen_until=60.0)
+    stds, rejected_for = [], []
+
+    def watch(estimator: XuSHAEKF) -> None:
+        stds.append(estimator.h_std)
+        since = estimator.aid["gps"].rejected_since
+        rejected_for.append(0.0 if since is None else estimator.time - since)
+
+    errors, _, estimator = fly(scene, on_step=watch)
+    noisy = slice(6000, None)
+    stds, rejected_for = np.array(stds), np.array(rejected_for)
+    assert estimator.gps_rejected <= 15
+    assert rejected_for[noisy].max() < estimator.params.reset_timeout
+    assert not estimator.status & source_bit("gps", SourceBit.ISOLATED)
+    assert np.abs(errors[7000:]).max() < bound
+    assert np.mean(np.abs(errors[noisy]) <= 2.0 * stds[noisy]) >= 0.8

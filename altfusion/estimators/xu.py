@@ -41,6 +41,12 @@ Deviations from the paper (the reasons in docs/estimators.md):
 * α_C averages each innovation normalised by its own C; α = min(1, (c/α_C)²) is the bounded
   mapping of eq. (18) (docs/papers.md), with α = 1 for α_C ≤ c (no division by α_C = 0);
 * K_{k-1}, P_{k-1} of eq. (22) are read as this sample's gain and posterior with R̂_{k-1};
+* R̂ of eq. (22) never falls below ``NOISE_FLOOR`` = 1/4 of the nominal R_k (σ half the
+  stated): identical samples (frozen sensors, a stub, a stuck replay) make v → 0, so that
+  eq. (22) drove R̂ toward (1 - H K) H P⁻ Hᵀ, which shrinks with R̂ itself, to 0 (laser
+  6·10⁻¹³ m², GPS 0.005 m² after 60 s); when the noise resumed, the gates (R̂ in C) rejected
+  most samples of the healthy sensors, a rejected sample does not feed R̂, and the estimate
+  drifted with an overconfident h_std (issue 29; docs/estimators.md);
 * γ = 16 (not given in the paper); strong tracking scales h, vz and b_a, and ε_b only on a
   baro sample, at most ``MAX_FADING`` per step;
 * gate: a sample with v² > ``gate_sigma``²·(H P⁻ Hᵀ + R̂) is rejected (its innovation still
@@ -77,6 +83,10 @@ MIN_VARIANCE = 1e-12
 """Floor of H P⁻ Hᵀ in the strong-tracking factor, m²."""
 MAX_FADING = 1000.0
 """Largest λ of one strong-tracking step (eq. 24); a larger mismatch takes a few samples."""
+NOISE_FLOOR = 0.25
+"""Floor of a noise estimate R̂ (eq. 22) as a fraction of its nominal R: a sensor is taken to
+be at most twice as precise (in σ) as stated. Without it identical samples drive R̂ to 0
+(see the module documentation)."""
 
 
 @dataclass(frozen=True)
@@ -151,12 +161,14 @@ class Channel:
 
     def estimate_noise(self, innovation: float, hph: float) -> None:
         """Eqs. (22) and (28), with H K_{k-1} = H P⁻ Hᵀ/(H P⁻ Hᵀ + R̂_{k-1}), the gain before
-        this noise estimate, and H P_{k-1} Hᵀ = (1 - H K_{k-1}) H P⁻ Hᵀ its posterior."""
+        this noise estimate, and H P_{k-1} Hᵀ = (1 - H K_{k-1}) H P⁻ Hᵀ its posterior; R̂ is
+        kept at or above :data:`NOISE_FLOOR` R_k (a deviation)."""
         self.beta = self.beta / (self.beta + self.b)                            # (28)
         hk = hph / (hph + self.R_hat)
         residual = (1.0 - hk) * innovation
-        self.R_hat = ((1.0 - self.beta) * self.R_hat
-                      + self.beta * (residual**2 + (1.0 - hk) * hph))           # (22)
+        estimate = ((1.0 - self.beta) * self.R_hat
+                    + self.beta * (residual**2 + (1.0 - hk) * hph))             # (22)
+        self.R_hat = max(estimate, NOISE_FLOOR * self.R_nominal)
 
 
 class XuSHAEKF(Estimator):
