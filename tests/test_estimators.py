@@ -14,7 +14,7 @@ from altfusion.estimators.whang import WhangGAEstimator, WhangParams
 from altfusion.physics.atmosphere import Atmosphere, AtmosphereParams
 from altfusion.physics.barometric import height_from_pressure, pressure_at
 from altfusion.physics.profiles import make_profile
-from altfusion.systems.faults import TRUE_NOISE
+from altfusion.systems.faults import BARO_BIAS_PSD, FAULTS, TRUE_NOISE
 
 ESTIMATORS = (BaselineKF, HajiyevAdaptiveEstimator, WhangGAEstimator)
 
@@ -177,6 +177,50 @@ def test_hajiyev_isolates_a_gps_step_and_falls_back_to_the_baro_offset():
             errors.append(estimator.h_est)
     assert isolated_at is not None and 30.0 < isolated_at <= 35.0
     assert abs(np.mean(errors)) < 33.0
+
+
+def test_hajiyev_follows_the_gps_once_a_failed_baro_is_isolated():
+    """Issue 29: the fault suite's flight (take-off, 15 m hover, climb to 120 m, descent at
+    200 s, landing) with a 0.5 m baro at 20 Hz and a 2 m GPS at 10 Hz, the baro +200 m from
+    130 s on (``baro_step``), the flight's ``drift_psd``. The baro must be isolated, and from
+    the scenario's transient on (isolation and recovery, 40 s) the estimate is the GPS's:
+    ĥ = h^GPS, h_std = σ_GPS (K = 1 with the isolated baro's variance unbounded), held for
+    one 20 Hz step between GPS samples (0.05 s: 0.1 m in the 2 m/s descent, negligible).
+
+    Tolerances for the n = 1300 GPS samples of 170-300 s, each one-sided at 99.9 %
+    (z = 3.09): the mean square of n standard normal errors has relative standard deviation
+    √(2/n) = 3.9 %, so RMS <= σ·√(1 + z√(2/n)) = 1.06 σ; |e| <= 2 h_std holds with
+    probability 0.9545 each, so the fraction >= 0.9545 - z·√(0.9545·0.0455/n) = 0.937; no
+    |e| beyond 5 σ (n × 5.7e-7 = 7e-4 for some sample to be). Seed 29 gives 2.00 m, 7.1 m
+    and 0.958. The old fusion around the frozen h_B (its residual the vehicle's motion since
+    the fault, which Δ̄'s random walk cannot follow: the GPS failed its gate in the descent
+    and the estimate froze until a height reset) gave 2.26 m, 8.6 m and 0.903 (seeds 0-9:
+    2.04-2.39 m, 7.8-10.9 m and 0.75-0.93)."""
+    fault = FAULTS["baro_step"]
+    sigma_baro, sigma_gps, step = 0.5, 2.0, 0.05
+    params = HajiyevParams(R_baro=sigma_baro**2, R_gps=sigma_gps**2, drift_psd=BARO_BIAS_PSD)
+    estimator = HajiyevAdaptiveEstimator(params, step_size=step)
+    feeder, rng = StreamFeeder(estimator), np.random.default_rng(29)
+    profile = make_profile("fault_flight")
+    errors, stds, isolated = [], [], []
+    for n in range(1, 6001):
+        t = step * n
+        h = profile.reference(t)[0]
+        baro = h + sigma_baro * rng.standard_normal() + (200.0 if t >= fault.start else 0.0)
+        gps = h + sigma_gps * rng.standard_normal()
+        feeder.step(baro={"baro_h": baro}, gps={"gps_h": gps} if n % 2 == 0 else None)
+        if t >= fault.start + fault.transient:
+            errors.append(estimator.h_est - h)
+            stds.append(estimator.h_std)
+            isolated.append(bool(estimator.status & source_bit("baro", SourceBit.ISOLATED)))
+    errors, stds = np.array(errors), np.array(stds)
+    n_gps, z = len(errors) // 2, 3.09
+    assert all(isolated)
+    rms = float(np.sqrt(np.mean(errors**2)))
+    assert rms <= sigma_gps * math.sqrt(1.0 + z * math.sqrt(2.0 / n_gps)), rms
+    assert np.abs(errors).max() <= 5.0 * sigma_gps
+    covered, p = float(np.mean(np.abs(errors) <= 2.0 * stds)), 0.9545
+    assert covered >= p - z * math.sqrt(p * (1.0 - p) / n_gps), covered
 
 
 @pytest.mark.parametrize("cls", [HajiyevAdaptiveEstimator, WhangGAEstimator])

@@ -50,9 +50,11 @@ Deviations from the paper:
 * GPS samples that arrive before the first baro sample are not fused (eq. 18 needs h_B; in a
   replayed log GPS may come first).
 
-The fault layer (``fault_detection`` true), not in the paper: the GPS gate
-:meth:`~HajiyevAdaptiveEstimator._gate_residual_on_reference` in place of
-:meth:`~HajiyevAdaptiveEstimator._gate_residual`,
+The fault layer (``fault_detection`` true), not in the paper: a GPS sample goes to
+:meth:`~HajiyevAdaptiveEstimator._fault_layer_gps`, whose GPS gate
+:meth:`~HajiyevAdaptiveEstimator._gate_residual_on_reference` replaces
+:meth:`~HajiyevAdaptiveEstimator._gate_residual` and whose
+:meth:`~HajiyevAdaptiveEstimator._follow_gps` is the GPS fallback;
 :meth:`~HajiyevAdaptiveEstimator._fall_back` and
 :meth:`~HajiyevAdaptiveEstimator.reset_height` (called by the fault layer of
 estimators/gating.py only); both gates share
@@ -79,11 +81,20 @@ estimators/gating.py only); both gates share
   sample (eq. 15) may carry the fault (the adaptive gain of eqs. 27, 30 is about 0.9 for a
   100 m residual), while Δ̄ is the baro's offset from the GPS level that the accepted
   samples give; a rejected outlier leaves the held correction;
+* while the baro is isolated the estimate is the GPS's
+  (:meth:`~HajiyevAdaptiveEstimator._follow_gps`): eqs. (27), (31) with the isolated baro's
+  variance unbounded, K = 1 and P = R_GPS, each GPS sample gated on its jump from the
+  estimate. The last accepted h_B is frozen since the fault, so the residual against it is
+  the vehicle's motion since, which Δ̄'s walk cannot follow: fused around it, the GPS failed
+  its gate in a 2 m/s descent and the estimate froze until a height reset (issue 29: errors
+  of 8-11 m against a 2 m GPS; now the GPS's own 2 m);
 * health (estimators/base.py): a baro that stays off for ``reset_timeout`` while the GPS
   agrees is isolated, and so is a GPS whose innovations against Δ̄ stay biased (the
-  estimate then stays h_B + Δ̄); with no source fused for that long the estimate resets.
+  estimate then stays h_B + Δ̄); with no source fused for that long the estimate resets
+  (onto the GPS sample while the baro is isolated).
 """
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -126,6 +137,8 @@ class HajiyevAdaptiveEstimator(Estimator):
     def initialize_filter(self) -> None:
         self.baro = float(self.baro_h)
         self._baro_time = float(self.baro_time)
+        self._gps_time = float(self.gps_time)
+        """Stamp of the last GPS sample, accepted or not (fault layer: its jump gate)."""
         self.started = self.has_sample("baro")
         self.adaptive_factor = 1.0
         self.gain = 0.0
@@ -147,22 +160,25 @@ class HajiyevAdaptiveEstimator(Estimator):
         self._publish()
 
     def fuse(self, stream: Stream, sample: dict[str, float]) -> None:
-        """A baro sample is h_B (eq. 18); a GPS sample is gated on its residual Δ (the one
-        dispatch on ``fault_detection``: :meth:`_gate_residual`, else the fault layer's
-        :meth:`_gate_residual_on_reference`) and fused (:meth:`_fuse_gps`)."""
+        """A baro sample is h_B (eq. 18); a GPS sample is gated on its residual Δ by
+        :meth:`_gate_residual` and fused (:meth:`_fuse_gps`), or with ``fault_detection`` (the
+        one dispatch on it) goes to the fault layer's :meth:`_fault_layer_gps`."""
         if stream is BARO:
             self._baro_sample(sample["baro_h"], sample["baro_time"])
             return
         if not self.has_sample("baro"):
             self.note("gps: sample before the first baro sample not fused (no h_B for eq. 18)")
             return
-        residual = sample["gps_h"] - self.baro                                  # (18)
         if self.params.fault_detection:
-            accepted = self._gate_residual_on_reference(residual)
+            self._fault_layer_gps(sample["gps_h"], sample["gps_time"])
         else:
-            accepted = self._gate_residual(residual)
-        if accepted:
-            self._fuse_gps(sample["gps_h"], residual)
+            self._fuse_if_passes(sample["gps_h"], self._gate_residual)
+
+    def _fuse_if_passes(self, h_gps: float, gate: Callable[[float], bool]) -> None:
+        """Fuse h^GPS (:meth:`_fuse_gps`) if its residual Δ (eq. 18) passes ``gate``."""
+        residual = h_gps - self.baro                                            # (18)
+        if gate(residual):
+            self._fuse_gps(h_gps, residual)
 
     def _fuse_gps(self, h_gps: float, residual: float) -> None:
         """Eqs. (15)-(19) with the adaptive factor of eqs. (26)-(31): the Kalman update of the
@@ -214,6 +230,39 @@ class HajiyevAdaptiveEstimator(Estimator):
         return True
 
     # ------------------------------------------------------------------ fault layer
+    def _fault_layer_gps(self, h_gps: float, stamp: float) -> None:
+        """A GPS sample with ``fault_detection``: while the baro is isolated the estimate
+        follows the GPS alone (:meth:`_follow_gps`), else the sample is gated on its residual
+        against the reference Δ̄ (:meth:`_gate_residual_on_reference`) and fused."""
+        elapsed, self._gps_time = stamp - self._gps_time, stamp
+        if self.aid["baro"].isolated:
+            self._follow_gps(h_gps, elapsed)
+        else:
+            self._fuse_if_passes(h_gps, self._gate_residual_on_reference)
+
+    def _follow_gps(self, h_gps: float, elapsed: float) -> None:
+        """The GPS fallback while the baro is isolated (PX4 EKF2 falling back to GNSS height):
+        h_B is the last accepted baro sample, frozen since the fault and as stale as the
+        vehicle has moved since, so it carries no information. Eqs. (27), (31) with the baro's
+        variance S·R_B unbounded give K = 1, P = R_GPS: ĥ = h^GPS. The sample is gated on its
+        jump from the estimate ``elapsed`` s after the GPS's previous sample, variance
+        2 R_GPS plus the motion ``max_vz`` allows (:meth:`jump_variance`; ĥ is the last
+        accepted GPS sample, or at the first after the isolation the fusion, whose P is below
+        R_GPS). Δ̄ is left frozen, its variance growing by ``drift_psd`` from its last update:
+        once a baro sample passes its gate again, the next GPS sample is gated against it.
+        Δ, S and eq. (34)'s residual keep the last fusion's values (Δ against the frozen h_B
+        would be the vehicle's motion since the fault)."""
+        p = self.params
+        verdict = self.gate(self.aid["gps"], h_gps - self.h_est,
+                            self.jump_variance(p.R_gps, elapsed), p.gate_sigma)
+        if verdict is not Verdict.FUSED:
+            return
+        self.gain = 1.0                                                         # (27)
+        self.correction = h_gps - self.baro
+        self.variance = self._fused_variance = p.R_gps                          # (31)
+        self._fused_time = self.time
+        self._publish()
+
     def _gate_residual_on_reference(self, residual: float) -> bool:
         """The GPS gate with ``fault_detection``: Δ̄ is the Kalman estimate of a random walk of
         PSD ``drift_psd`` measured by Δ with variance R_B + R_GPS (its innovations are white
@@ -250,10 +299,17 @@ class HajiyevAdaptiveEstimator(Estimator):
         self._publish()
 
     def reset_height(self, source: str, innovation: float, variance: float) -> None:
-        """A baro reset takes the new baro level; any reset drops the residual reference, so
-        that the next GPS sample is fused whatever its residual and starts a new one."""
+        """A baro reset takes the new baro level; a GPS reset while the baro is isolated
+        moves the estimate onto the GPS sample (``variance`` its variance: the estimate
+        follows the GPS alone, :meth:`_follow_gps`); any reset drops the residual reference,
+        so that the next GPS sample fused with the baro is fused whatever its residual and
+        starts a new one."""
         if source == "baro":
             self.baro += innovation
+        elif self.aid["baro"].isolated:
+            self.correction += innovation
+            self.variance = self._fused_variance = variance
+            self._fused_time = self.time
         self._reference = None
         self._publish()
 
