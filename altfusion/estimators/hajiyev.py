@@ -81,13 +81,13 @@ estimators/gating.py only); both gates share
   sample (eq. 15) may carry the fault (the adaptive gain of eqs. 27, 30 is about 0.9 for a
   100 m residual), while Δ̄ is the baro's offset from the GPS level that the accepted
   samples give; a rejected outlier leaves the held correction;
-* while the baro is isolated the estimate is the GPS's
-  (:meth:`~HajiyevAdaptiveEstimator._follow_gps`): eqs. (27), (31) with the isolated baro's
-  variance unbounded, K = 1 and P = R_GPS, each GPS sample gated on its jump from the
-  estimate. The last accepted h_B is frozen since the fault, so the residual against it is
-  the vehicle's motion since, which Δ̄'s walk cannot follow: fused around it, the GPS failed
-  its gate in a 2 m/s descent and the estimate froze until a height reset (issue 29: errors
-  of 8-11 m against a 2 m GPS; now the GPS's own 2 m);
+* while the baro is isolated the estimate follows the GPS
+  (:meth:`~HajiyevAdaptiveEstimator._follow_gps`): eqs. (27), (31) with the estimate itself
+  as the prior, its variance grown by the motion ``max_vz`` allows since the previous GPS
+  sample (a random-walk filter on the height), each GPS sample gated on its innovation. The
+  last accepted h_B is frozen since the fault, so the residual against it is the vehicle's
+  motion since, which Δ̄'s walk cannot follow: fused around it, the GPS would fail its gate
+  in a descent and the estimate freeze until a height reset;
 * health (estimators/base.py): a baro that stays off for ``reset_timeout`` while the GPS
   agrees is isolated, and so is a GPS whose innovations against Δ̄ stay biased (the
   estimate then stays h_B + Δ̄); with no source fused for that long the estimate resets
@@ -243,23 +243,27 @@ class HajiyevAdaptiveEstimator(Estimator):
     def _follow_gps(self, h_gps: float, elapsed: float) -> None:
         """The GPS fallback while the baro is isolated (PX4 EKF2 falling back to GNSS height):
         h_B is the last accepted baro sample, frozen since the fault and as stale as the
-        vehicle has moved since, so it carries no information. Eqs. (27), (31) with the baro's
-        variance S·R_B unbounded give K = 1, P = R_GPS: ĥ = h^GPS. The sample is gated on its
-        jump from the estimate ``elapsed`` s after the GPS's previous sample, variance
-        2 R_GPS plus the motion ``max_vz`` allows (:meth:`jump_variance`; ĥ is the last
-        accepted GPS sample, or at the first after the isolation the fusion, whose P is below
-        R_GPS). Δ̄ is left frozen, its variance growing by ``drift_psd`` from its last update:
-        once a baro sample passes its gate again, the next GPS sample is gated against it.
-        Δ, S and eq. (34)'s residual keep the last fusion's values (Δ against the frozen h_B
-        would be the vehicle's motion since the fault)."""
+        vehicle has moved since, so it carries no information. Eqs. (27), (31) with the
+        estimate itself as the prior instead of h_B: ĥ⁻ = ĥ with variance
+        P⁻ = P + (max_vz·Δt)², the motion ``max_vz`` allows over the Δt = ``elapsed`` s since
+        the GPS's previous sample counted as one standard deviation (as the baro's jump gate
+        counts it), so K = P⁻/(P⁻ + R_GPS) and P = P⁻·R_GPS/(P⁻ + R_GPS): a random-walk
+        filter on the height whose lag stays within its P for any speed up to ``max_vz``
+        (steady state: σ ≈ 12 m for a 30 m GNSS at 10 Hz, the GNSS's own σ at 1 Hz or for a
+        2 m one). The sample is gated on its innovation against P⁻ + R_GPS. Δ̄ is left
+        frozen, its variance growing by ``drift_psd`` from its last update: once a baro
+        sample passes its gate again, the next GPS sample is gated against it. Δ, S and eq.
+        (34)'s residual keep the last fusion's values (Δ against the frozen h_B would be the
+        vehicle's motion since the fault)."""
         p = self.params
-        verdict = self.gate(self.aid["gps"], h_gps - self.h_est,
-                            self.jump_variance(p.R_gps, elapsed), p.gate_sigma)
-        if verdict is not Verdict.FUSED:
+        prior = self.variance + (p.max_vz * elapsed) ** 2
+        innovation = h_gps - self.h_est
+        if self.gate(self.aid["gps"], innovation, prior + p.R_gps,
+                     p.gate_sigma) is not Verdict.FUSED:
             return
-        self.gain = 1.0                                                         # (27)
-        self.correction = h_gps - self.baro
-        self.variance = self._fused_variance = p.R_gps                          # (31)
+        self.gain = prior / (prior + p.R_gps)                                   # (27)
+        self.correction += self.gain * innovation
+        self.variance = self._fused_variance = prior * p.R_gps / (prior + p.R_gps)  # (31)
         self._fused_time = self.time
         self._publish()
 
