@@ -17,8 +17,12 @@ import pytest
 
 from altfusion.cosim import write_ssp
 from altfusion.montecarlo.aggregation import aggregate
-from altfusion.montecarlo.backends import WorkerPool
-from altfusion.montecarlo.execution import CampaignSettings, Execution, run_campaign
+from altfusion.montecarlo.execution import (
+    CampaignSettings,
+    Execution,
+    kept_workers,
+    run_campaign,
+)
 from altfusion.montecarlo.source import CampaignError, SystemSource
 from altfusion.montecarlo.storage import finished_runs, read_manifest, read_run, run_path
 from altfusion.montecarlo.tables import statistics_json
@@ -116,15 +120,11 @@ def test_campaigns_on_a_kept_worker_pool_give_each_its_own_numbers(gusty_ssp, re
     simulations, and the second gives the reference campaign's numbers (an override of the
     first does not outlive its runs)."""
     source = SystemSource.from_path(gusty_ssp)
-    pool = WorkerPool(2)
-    execution = Execution(workers=2, progress=False, pool=pool)
-    try:
+    with kept_workers(Execution(workers=2, progress=False)) as execution:
         calm = run_campaign(source, tmp_path / "calm", CampaignSettings(
             RUNS, parameters={"atmosphere.wind_mean": 0.0, "atmosphere.gust_std": 0.0}),
             execution)
         again = run_campaign(source, tmp_path / "again", CampaignSettings(RUNS), execution)
-    finally:
-        pool.close()
     assert calm.complete and again.complete
     workers = {read_run(tmp_path / folder, i).worker for folder in ("calm", "again")
                for i in range(RUNS)}

@@ -264,7 +264,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
     },
     ('baro_step', True): {
         'BaselineKF': '28b1fb6ecc37a808',
-        'HajiyevAdaptiveEstimator': 'a0471d8961c25e35',
+        'HajiyevAdaptiveEstimator': '5bc148fa15de50e8',
         'WhangGAEstimator': '8b38618cb50850d6',
         'BaoDriftEstimator': '77f5faa6621e9c0d',
         'YangFusionKF': 'b0414347773e4aa3',

@@ -187,12 +187,18 @@ class HajiyevAdaptiveEstimator(Estimator):
         factor = 1.0
         if p.adaptive and residual**2 >= p.R_gps + p.R_baro:                     # (28)
             factor = (residual**2 - p.R_gps) / p.R_baro                         # (30)
-        result = update(np.array([self.baro]), np.array([[factor * p.R_baro]]),
-                        h_gps, H, p.R_gps)                                      # (27), (31)
         self.adaptive_factor = factor
-        self.gain = float(result.K[0, 0])
         self.residual = residual
         self.normalized_residual = residual / np.sqrt(p.R_baro + p.R_gps)       # (34)
+        self._update_estimate(self.baro, factor * p.R_baro, h_gps)
+
+    def _update_estimate(self, prior: float, variance: float, h_gps: float) -> None:
+        """Eqs. (27), (31): the Kalman update of the height ``prior`` of variance
+        ``variance`` by h^GPS (variance R_GPS); the correction from h_B held until the next
+        fusion (eq. 15)."""
+        result = update(np.array([prior]), np.array([[variance]]), h_gps, H,
+                        self.params.R_gps)                                      # (27), (31)
+        self.gain = float(result.K[0, 0])
         self.correction = float(result.x[0]) - self.baro
         self.variance = self._fused_variance = float(result.P[0, 0])
         self._fused_time = self.time
@@ -257,15 +263,9 @@ class HajiyevAdaptiveEstimator(Estimator):
         vehicle's motion since the fault)."""
         p = self.params
         prior = self.variance + (p.max_vz * elapsed) ** 2
-        innovation = h_gps - self.h_est
-        if self.gate(self.aid["gps"], innovation, prior + p.R_gps,
-                     p.gate_sigma) is not Verdict.FUSED:
-            return
-        self.gain = prior / (prior + p.R_gps)                                   # (27)
-        self.correction += self.gain * innovation
-        self.variance = self._fused_variance = prior * p.R_gps / (prior + p.R_gps)  # (31)
-        self._fused_time = self.time
-        self._publish()
+        if self.gate(self.aid["gps"], h_gps - self.h_est, prior + p.R_gps,
+                     p.gate_sigma) is Verdict.FUSED:
+            self._update_estimate(self.h_est, prior, h_gps)
 
     def _gate_residual_on_reference(self, residual: float) -> bool:
         """The GPS gate with ``fault_detection``: Δ̄ is the Kalman estimate of a random walk of

@@ -58,10 +58,9 @@ def command_evaluate(args: argparse.Namespace) -> int:
         run_evaluation,
         stored_runs,
     )
-    from altfusion.montecarlo.backends import WorkerPool
     from altfusion.montecarlo.campaign_events import report_campaign_events
     from altfusion.montecarlo.commands import INTERRUPTED, _report_outcome
-    from altfusion.montecarlo.execution import Execution
+    from altfusion.montecarlo.execution import Execution, kept_workers
 
     if args.runs is not None and args.runs < 1:
         raise UsageError(f"--runs {args.runs}: expected at least 1 run per scenario")
@@ -70,13 +69,9 @@ def command_evaluate(args: argparse.Namespace) -> int:
         args.models, _names(args.estimators), _names(args.scenarios))
     runs = args.runs or (stored_runs(out) if args.resume else None) or DEFAULT_RUNS
     settings = EvaluationSettings(runs, args.seed, args.backend, args.stop)
-    pool = WorkerPool(args.workers)          # the scenarios' campaigns share the workers
-    try:
+    with kept_workers(Execution(args.workers, args.scheduler, not args.quiet)) as execution:
         outcomes = run_evaluation(out, scenarios, list(estimators), fmu_paths, settings,
-                                  Execution(args.workers, args.scheduler, not args.quiet, pool),
-                                  args.resume)
-    finally:
-        pool.close()
+                                  execution, args.resume)
     status, elapsed = 0, 0.0
     hint = f"altfusion evaluate --out {out} --resume (with the same options)"
     for scenario, outcome in outcomes:

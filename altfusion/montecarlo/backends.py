@@ -127,11 +127,16 @@ class WorkerPool:
     def __init__(self, workers: int | None):
         self.workers = workers
         self._backend: LocalWorkers | None = None
+        self._size = 0
 
     def backend(self, task: CampaignTask, runs: int) -> LocalWorkers:
-        """The pool's workers, started for ``task`` and ``runs`` runs if none run."""
+        """The pool's workers for ``task``'s ``runs`` runs: those running, or new ones if none
+        run or fewer than these runs can use (a resumed first campaign missing one run)."""
+        size = local_worker_count(self.workers, runs)
+        if self._backend is not None and size > self._size:
+            self.close()
         if self._backend is None:
-            self._backend = LocalWorkers(task, local_worker_count(self.workers, runs))
+            self._backend, self._size = LocalWorkers(task, size), size
         return self._backend
 
     def release(self, cancel: bool) -> None:

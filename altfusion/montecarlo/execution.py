@@ -4,7 +4,9 @@ runs the missing ones of the same campaign."""
 
 import time
 import traceback
+from collections.abc import Iterator
 from concurrent.futures import BrokenExecutor
+from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -65,6 +67,18 @@ class Execution:
     scheduler: str | None = None
     progress: bool = True
     pool: WorkerPool | None = None
+
+
+@contextmanager
+def kept_workers(execution: Execution) -> Iterator[Execution]:
+    """``execution`` with one :class:`~altfusion.montecarlo.backends.WorkerPool` of local
+    workers for every campaign run with it (a reproduction's, an evaluation's), closed on
+    exit."""
+    pool = WorkerPool(execution.workers)
+    try:
+        yield replace(execution, pool=pool)
+    finally:
+        pool.close()
 
 
 @dataclass

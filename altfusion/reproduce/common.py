@@ -34,8 +34,12 @@ from altfusion.cosim.results import Results
 from altfusion.cosim.runner import simulate
 from altfusion.cosim.ssp import read_ssp
 from altfusion.estimators.registry import ESTIMATOR_CLASSES
-from altfusion.montecarlo.backends import WorkerPool
-from altfusion.montecarlo.execution import CampaignSettings, Execution, run_campaign
+from altfusion.montecarlo.execution import (
+    CampaignSettings,
+    Execution,
+    kept_workers,
+    run_campaign,
+)
 from altfusion.montecarlo.seeds import run_seeds, seeded_components
 from altfusion.montecarlo.source import CampaignError, SystemSource
 from altfusion.montecarlo.statistics import Interval, rms_chi2_bounds, root_interval
@@ -95,12 +99,8 @@ def run_campaigns(campaigns: tuple[Campaign, ...], options: ReproduceOptions,
     """Run every campaign, or with ``options.resume`` complete those already started; the
     exit status: 0 when every campaign is complete, 130 if interrupted, 1 if runs failed or a
     worker died, 2 if a campaign cannot start (its message printed)."""
-    pool = WorkerPool(options.workers)
-    try:
-        return _run_each(campaigns, options, default_runs,
-                         Execution(options.workers, options.scheduler, True, pool))
-    finally:
-        pool.close()
+    with kept_workers(Execution(options.workers, options.scheduler)) as execution:
+        return _run_each(campaigns, options, default_runs, execution)
 
 
 def _run_each(campaigns: tuple[Campaign, ...], options: ReproduceOptions, default_runs: int,
