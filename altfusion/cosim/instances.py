@@ -37,6 +37,7 @@ from fmpy.fmi2 import (
     fmi2ValueReference,
 )
 
+from altfusion.cosim.scratch import ScratchFolder
 from altfusion.params import coerce
 from altfusion.version import CORE_VERSION
 
@@ -210,6 +211,9 @@ def _router() -> _LogRouter:
 
 
 _EXTRACTED: dict[Path, str] = {}
+"""The FMUs extracted by this process (see :func:`_extracted_folder`)."""
+_EXTRACTED_BY: int | None = None
+_FMU_FOLDER: ScratchFolder | None = None
 
 
 _PYTHONFMU_LIBRARIES: dict[Path, Any] = {}
@@ -262,10 +266,17 @@ def _track_library(path: Path, fmu: FMU2Slave) -> None:
 
 
 def _extracted_folder(path: Path) -> str:
-    """The FMU extracted once per process (its libraries stay loaded from there)."""
+    """The FMU extracted once per process (its libraries stay loaded from there), into a
+    folder of this process's that is removed when it exits (:mod:`altfusion.cosim.scratch`).
+    A forked child keeps using what its parent extracted (its libraries are mapped from
+    there) and extracts what is new into a folder of its own."""
+    global _EXTRACTED_BY, _FMU_FOLDER
     folder = _EXTRACTED.get(path)
     if folder is None:
-        folder = _EXTRACTED[path] = extract(str(path))
+        if os.getpid() != _EXTRACTED_BY:
+            _EXTRACTED_BY, _FMU_FOLDER = os.getpid(), ScratchFolder("altfusion_fmus_")
+        target = _FMU_FOLDER.path / f"{len(_EXTRACTED)}_{path.stem}"
+        folder = _EXTRACTED[path] = str(extract(str(path), unzipdir=target))
     return folder
 
 

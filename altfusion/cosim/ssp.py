@@ -20,7 +20,6 @@ The reader parses and schema-validates ``SystemStructure.ssd`` with fmpy's SSP r
 reads those annotations.
 """
 
-import tempfile
 import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -31,6 +30,7 @@ from fmpy import read_model_description
 from fmpy.ssp.ssd import read_ssd
 from lxml import etree
 
+from altfusion.cosim.scratch import ScratchFolder
 from altfusion.errors import UsageError
 from altfusion.systems.spec import ComponentSpec, Connection, Metric, SystemSpec
 from altfusion.units import BASE_UNITS
@@ -189,11 +189,13 @@ def _parameter_value(parameter: Any) -> Any:
 
 @dataclass
 class LoadedSystem:
-    """A system read from an SSP archive, with its FMUs extracted to a temporary folder."""
+    """A system read from an SSP archive, with its FMUs unpacked to a temporary folder that
+    is removed with this object (or when the process exits)."""
 
     spec: SystemSpec
     fmu_paths: dict[str, Path]
-    _folder: Any = field(default=None, repr=False)
+    folder: ScratchFolder | None = field(default=None, repr=False)
+    """Where the FMUs were unpacked (kept by copies made with ``dataclasses.replace``)."""
 
 
 def read_ssp(path: Path) -> LoadedSystem:
@@ -209,9 +211,9 @@ def read_ssp(path: Path) -> LoadedSystem:
         ssd = read_ssd(str(path), validate=True)
         with zipfile.ZipFile(path) as archive:
             root = etree.fromstring(archive.read("SystemStructure.ssd"))
-            folder = tempfile.TemporaryDirectory(prefix="altfusion_ssp_")
-            archive.extractall(folder.name, [n for n in archive.namelist()
-                                             if n.startswith("resources/")])
+            folder = ScratchFolder("altfusion_ssp_")
+            archive.extractall(folder.path, [n for n in archive.namelist()
+                                        if n.startswith("resources/")])
     except (OSError, zipfile.BadZipFile, KeyError, etree.LxmlError, ValueError) as error:
         raise UsageError(f"{path}: not a valid SSP archive ({error})") from error
     system = ssd.system
@@ -229,7 +231,7 @@ def read_ssp(path: Path) -> LoadedSystem:
         if step is None:
             raise UsageError(f"{path}: component {element.name} has no step size")
         fmu = Path(element.source).stem
-        fmu_paths[fmu] = Path(folder.name) / element.source
+        fmu_paths[fmu] = folder.path / element.source
         if not fmu_paths[fmu].is_file():
             raise UsageError(f"{path}: component {element.name}: FMU {element.source} "
                              f"missing from the archive")
