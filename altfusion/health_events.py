@@ -41,6 +41,8 @@ from altfusion.estimators.health import HEIGHT_SOURCES, SOURCES, SourceBit, Stat
 INITIALIZED, REJECTED, ISOLATED, READMITTED = "initialized", "rejected", "isolated", "re-admitted"
 FALLBACK, HEIGHT_RESET = "fallback", "height reset"
 INVALID, VALID = "validity lost", "validity regained"
+BAD_ACC = "accelerometer found bad (inconsistent with the height sources): noise inflated"
+GOOD_ACC = "accelerometer consistent again"
 
 SHOWN_LINES = 12
 """Most lines :func:`format_events` prints per estimator; the rest are counted (all are in
@@ -118,7 +120,7 @@ class _EstimatorHistory:
                 found += self.rejections(source)
             if source in HEIGHT_SOURCES:
                 found += self.isolations(source)
-        found += self.resets() + self.validity()
+        found += self.resets() + self.validity() + self.accelerometer()
         return found
 
     def rejections(self, source: str) -> list[HealthEvent]:
@@ -166,6 +168,14 @@ class _EstimatorHistory:
                          if self.source_bit(s, SourceBit.REJECTED)[row]), "")
             found.append(self.event(row, onto, HEIGHT_RESET, int(added[row])))
         return found
+
+    def accelerometer(self) -> list[HealthEvent]:
+        """The accelerometer found inconsistent with every height source (status bit
+        BAD_ACC_VERTICAL set) and consistent again (cleared)."""
+        bad = self.bit(Status.BAD_ACC_VERTICAL).astype(np.int8)
+        change = np.diff(bad, prepend=0)
+        return [self.event(int(row), "", BAD_ACC if change[row] > 0 else GOOD_ACC)
+                for row in np.flatnonzero(change)]
 
     def validity(self) -> list[HealthEvent]:
         valid = self.columns.get("h_valid")

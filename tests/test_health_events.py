@@ -8,7 +8,9 @@ import numpy as np
 from altfusion.cosim.results import Results
 from altfusion.estimators.health import SourceBit, Status, source_bit
 from altfusion.health_events import (
+    BAD_ACC,
     FALLBACK,
+    GOOD_ACC,
     HEIGHT_RESET,
     INITIALIZED,
     INVALID,
@@ -25,7 +27,8 @@ from altfusion.health_events import (
 
 DT = 0.1
 ON = int(Status.INITIALIZED)
-BARO_FUSED, BARO_REJECTED, BARO_ISOLATED = (source_bit("baro", b) for b in SourceBit)
+BARO_FUSED, BARO_REJECTED, BARO_ISOLATED = (source_bit("baro", b) for b in (
+    SourceBit.FUSED, SourceBit.REJECTED, SourceBit.ISOLATED))
 GPS_FUSED, GPS_REJECTED = source_bit("gps", SourceBit.FUSED), source_bit("gps", SourceBit.REJECTED)
 
 
@@ -117,3 +120,12 @@ def test_status_bits_are_named_and_the_csv_lists_every_event():
     assert events_csv(events, {"run": [3, 3]}).splitlines() == [
         "run,time,estimator,source,what,test_ratio,count,exact",
         "3,1.5,est,baro,isolated,9,1,1", "3,2,est,,validity regained,nan,1,1"]
+
+
+def test_a_bad_accelerometer_reads_as_found_bad_then_consistent_again():
+    fused = ON | BARO_FUSED | GPS_FUSED
+    bad = fused | Status.BAD_ACC_VERTICAL
+    rows = [(fused, 0.1, 0.1, 1, 0)] * 2 + [(bad, 0.1, 0.1, 1, 0)] * 3 + [(fused, 0.1, 0.1, 1, 0)]
+    said = [(round(e.time, 1), e.source, e.what)
+            for e in health_events(history(rows)) if e.what in (BAD_ACC, GOOD_ACC)]
+    assert said == [(0.2, "", BAD_ACC), (0.5, "", GOOD_ACC)]

@@ -86,7 +86,7 @@ class AidSource:
 
     __slots__ = ("name", "height", "fused_mask", "rejected_mask", "isolated_mask",
                  "test_ratio", "rejected", "innovation", "variance", "gate_width", "window",
-                 "last_fused", "rejected_since", "biased", "bits")
+                 "last_fused", "last_gated", "rejected_since", "biased", "bits")
 
     def __init__(self, name: str) -> None:
         self.name = name
@@ -109,6 +109,8 @@ class AidSource:
         """The bias test's innovations over ``reset_timeout`` (fault layer)."""
         self.last_fused = -math.inf
         """Time of the last fusion that aided the height (height sources)."""
+        self.last_gated = -math.inf
+        """Time of the last sample gated (its innovation and variance are the last ones)."""
         self.rejected_since: float | None = None
         """Time of the first of the current run of rejections (None: last sample fused)."""
         self.biased = False

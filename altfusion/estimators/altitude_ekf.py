@@ -15,8 +15,10 @@ latest one, held):
 
     h⁺ = h + Δ·v + Δ²/2·a,   v⁺ = v + Δ·a,   b_a, d, k, t, g: random walks
     Q: white acceleration of PSD acc_noise²·T_acc on (h, v), T_acc the accelerometer's
-       sample period, at least Δ; acc_bias_psd, baro_bias_psd, baro_scale_psd,
-       terrain_psd and gps_bias_psd on the others (0 on the reference's frozen states)
+       sample period, at least Δ (acc_noise inflated while the accelerometer is found bad,
+       PX4's bad_acc_vertical: ``accelerometer_check``); acc_bias_psd, baro_bias_psd,
+       baro_scale_psd, terrain_psd and gps_bias_psd on the others (0 on the reference's
+       frozen states)
 
 Without an accelerometer acc_z is taken as 0, so that b_a carries minus the vehicle's
 acceleration: a constant-acceleration model (yang2020's eq. 11 with white jerk), b_a a random
@@ -235,7 +237,8 @@ class AltitudeEKF(Estimator):
         P[V] = [p1 - e * p2 for p1, p2 in zip(P[V], P[BA], strict=True)]
         for row in P:
             row[H], row[V] = row[H] + dt * row[V] - c * row[BA], row[V] - e * row[BA]
-        q = p.acc_noise**2 * max(dt, self._acc_period) if acc_on else p.accel_psd
+        noise = p.acc_noise if self.acc_check is None else self.acc_check.noise
+        q = noise**2 * max(dt, self._acc_period) if acc_on else p.accel_psd
         P[H][H] += q * dt**3 / 3.0
         P[H][V] += q * dt**2 / 2.0
         P[V][V] += q * dt
@@ -245,6 +248,11 @@ class AltitudeEKF(Estimator):
         for j in range(N):                                # exact symmetry
             P[j][H], P[j][V] = P[H][j], P[V][j]
         self.x, self.P = x, P
+
+    def accelerometer_noise(self) -> float:
+        """``acc_noise``: checked, and inflated while found bad, with ``fault_detection``
+        (:mod:`~altfusion.estimators.accelerometer_check`)."""
+        return self.params.acc_noise
 
     def _switch_acceleration(self, acc_on: bool) -> None:
         """The accelerometer came or went: b_a changes meaning (its bias, or minus the

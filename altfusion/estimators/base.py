@@ -36,6 +36,7 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 from altfusion.component import Component
+from altfusion.estimators.accelerometer_check import AccelerometerCheck
 from altfusion.estimators.aid_source import AidSource, Verdict
 from altfusion.estimators.gating import Gating
 from altfusion.estimators.health import (
@@ -153,6 +154,11 @@ class Estimator(SampleIntake, Gating, Component):
         """The aid sources by name."""
         self._heights = tuple(source for source in self.aid_sources if source.height)
         self._last_aiding = -math.inf
+        noise = self.accelerometer_noise()
+        self.acc_check = AccelerometerCheck(noise) if (
+            noise is not None and self.params.fault_detection) else None
+        """PX4's bad_acc_vertical check of the accelerometer (fault layer; None without)."""
+        self._judges = (*self._heights, *(s for s in self.aid_sources if s.name == "gps_vz"))
         self.initialize_filter()
         self._publish_health()
 
@@ -169,6 +175,12 @@ class Estimator(SampleIntake, Gating, Component):
         """Move the height estimate by ``innovation`` onto a sample of ``source`` whose
         variance is ``variance`` (PX4's height reset): the height's variance becomes the
         sample's, its correlations with the other states zero."""
+
+    def accelerometer_noise(self) -> float | None:
+        """The accelerometer's stated noise, 1σ per sample (m/s²), for an estimator that
+        uses one (its noise is then checked and inflated while found bad:
+        :mod:`~altfusion.estimators.accelerometer_check`); None (the default): none."""
+        return None
 
     def reset_offset(self, source: str, innovation: float, variance: float) -> bool:
         """Move the offset state of height source ``source`` by ``innovation`` onto a sample
@@ -190,6 +202,8 @@ class Estimator(SampleIntake, Gating, Component):
         self._step_flags = 0
         self.propagate(self.dt)
         self.fuse_samples(self.due_samples())
+        if self.acc_check is not None and self.started:
+            self.acc_check.step(self._judges, self.time, self.dt)
         self._publish_health()
 
     def _publish_health(self) -> None:
@@ -203,4 +217,6 @@ class Estimator(SampleIntake, Gating, Component):
         self.h_valid = bool(self.started and aided)
         for source in self.aid_sources:
             flags |= source.bits
+        if self.acc_check is not None and self.acc_check.bad:
+            flags |= STEP_BITS.BAD_ACC_VERTICAL
         self.status = flags

@@ -31,10 +31,10 @@ class Gating:
         else:
             ratio = 0.0
         source.test_ratio = min(ratio, 1e300)
-        source.innovation, source.variance = innovation, variance
+        source.innovation, source.variance, source.last_gated = innovation, variance, self.time
         biased = sigmas > 0.0 and self.params.fault_detection and faults.bias_test(
             source, self._heights, self.time, self.params.reset_timeout, innovation,
-            variance, sigmas)
+            variance, sigmas) and not self._accelerometer_suspect()
         if ratio <= 1.0 and not biased:
             if sigmas > 0.0:
                 source.gate_width = sigmas * math.sqrt(max(variance, 0.0))
@@ -93,13 +93,20 @@ class Gating:
         if (self.params.fault_detection
                 and now - source.rejected_since >= self.params.reset_timeout
                 and (biased or self.contradicted(source, innovation))
-                and not source.isolated):
+                and not source.isolated and not self._accelerometer_suspect()):
             source.isolate()
             self.note(f"{source.name}: rejected for {now - source.rejected_since:.3g} s while "
                       f"other sources are fused: isolated until a sample passes the gate")
         self.note(f"{source.name}: sample rejected (innovation {innovation:.4g}, test ratio "
                   f"{ratio:.3g}{', persistently biased' if biased else ''})")
         return Verdict.REJECTED
+
+    def _accelerometer_suspect(self) -> bool:
+        """True while the accelerometer check finds the prediction inconsistent with every
+        height source (:mod:`~altfusion.estimators.accelerometer_check`): then the sources'
+        disagreement is the prediction's fault, and no source is isolated for it."""
+        check = self.acc_check
+        return check is not None and check.suspect
 
     def contradicted(self, source: AidSource, innovation: float) -> bool:
         """True if another height source pins the height tighter than ``innovation``, or

@@ -39,6 +39,10 @@ class Status(IntFlag):
     """A sample was refused in this step for its time stamp: further ahead of the clock than
     ``max_sample_lead``, further behind than ``max_sample_delay``, or before its stream's
     last sample."""
+    BAD_ACC_VERTICAL = 1 << 5
+    """The accelerometer is inconsistent with every height source and its noise inflated
+    more than twofold (PX4 EKF2's ``bad_acc_vertical``;
+    :mod:`~altfusion.estimators.accelerometer_check`)."""
 
 
 STEP_BITS = SimpleNamespace(**{flag.name: int(flag) for flag in Status})

@@ -1,0 +1,182 @@
+"""The vertical accelerometer checked against every height source (PX4 EKF2's
+``bad_acc_vertical``), with its noise inflated while it is found bad.
+
+An estimator that integrates an accelerometer (AltitudeEKF, as its input) or fuses it
+(YangFusionKF, as a measurement of the acceleration) trusts it for the motion between height
+samples. An accelerometer much noisier than its stated noise (vibration, a loose mount,
+clipping) drives the prediction off while the filter's variances stay small: every height
+source then disagrees with the prediction at once, each far beyond its own innovation
+standard deviation, and on the same side (the prediction is off, not the sources). One
+height source alone could be off itself; every one at once, together with the GNSS speed
+where there is one, points at the accelerometer.
+
+Check, once per estimator step (PX4 EKF2 ``checkVerticalAccelerationHealth``): the step is
+*inconsistent* when, of the aid sources that judge the prediction (height sources and the
+GNSS vertical speed; isolated ones left out) gated within :data:`WINDOW`, at least
+:data:`MIN_SOURCES` disagree with the prediction by more than :data:`SIGMAS` standard
+deviations, all on one side, and none of the others pins the prediction tighter than those
+disagreements (a source that precise and consistent says the prediction is right). A
+height source's disagreement is the mean of its innovations over its bias window (over
+seconds, many coarse samples see a drift no single one can), the GNSS speed's its last
+innovation. The accelerometer's noise is too small for what the
+prediction shows when more than :data:`FRACTION` of the steps of the last :data:`WINDOW` (an
+exponential average of that time constant) were inconsistent.
+
+Then its noise is inflated, by :data:`GROWTH` at most every :data:`ESCALATION` while the
+steps stay inconsistent, up to the accelerometer's clipping level (an accelerometer noisier
+than that measures nothing), and returns to the stated noise with the time constant
+:data:`DECAY` (a bounded innovation-based adaptation, after Mehra: the noise settles just
+above the level the innovations show). The estimator reads
+:attr:`AccelerometerCheck.noise` where it used its stated noise; ``status`` carries the
+bit ``BAD_ACC_VERTICAL`` (PX4's ``bad_acc_vertical``) while the noise is inflated by
+more than :data:`BAD`.
+
+Deviations from PX4: PX4 requires clipping evidence unless GNSS speed and height are both
+available, holds the flag for 10 s (``BADACC_PROBATION``) and inflates the noise to one
+fixed level (``BADACC_BIAS_PNOISE``, 4.9 m/s²); here any two independent judges suffice (two
+height sources are independent of each other) and the inflation follows the evidence (a
+40x noisier accelerometer needs 2 m/s², a 10 m/s² one twice PX4's level).
+"""
+
+import math
+
+from altfusion.estimators.aid_source import AidSource
+from altfusion.estimators.fault_detection import BIAS_MIN_SAMPLES
+from altfusion.estimators.streams import ACC_CLIP
+
+SIGMAS = 3.0
+"""An innovation beyond this many standard deviations counts against the prediction (PX4
+EKF2's vertical innovation test limit, 3)."""
+
+WINDOW = 1.0
+"""Time constant of the fraction of inconsistent steps, and how recent a source's last
+gated sample must be to count, s (PX4: the clipping fraction over the past 1 s)."""
+
+FRACTION = 0.5
+"""The accelerometer is bad when more than this fraction of the recent steps was
+inconsistent (PX4: more than 50 % clipped samples in the past 1 s)."""
+
+PROBATION = 10.0
+"""The accelerometer stays suspect this long after the last time the steps were found
+inconsistent, s (PX4 BADACC_PROBATION): long enough for the inflated noise to bring the
+prediction back onto the sources before any of them can be isolated for its fault."""
+
+MIN_SOURCES = 2
+"""Fewest independent judges of the prediction for a step to count: with one height source
+alone, that source could be the one off."""
+
+RANGE, RANGE_SOURCES = "range", ("radar", "laser")
+"""The rangefinders count as one judge: both measure above the same terrain, and a terrain
+step moves both of their innovations as an accelerometer error would."""
+
+GROWTH = 4.0
+"""Factor of the noise's inflation at each :data:`ESCALATION` over which the steps stay
+inconsistent."""
+
+ESCALATION = 3.0
+"""Time between two inflations, s: longer than the height sources' bias windows
+(``reset_timeout``, 2.5 s by default), so that an inflation is judged on innovations taken
+after it."""
+
+DECAY = 300.0
+"""Time constant of the inflation's return to the stated noise, s: slow, so that a noise
+that is really larger stays inflated between two inflations (the check can only see a noise
+too small, never one too large)."""
+
+BAD = 2.0
+"""The accelerometer is reported bad (``status`` bit ``BAD_ACC_VERTICAL``) while its noise
+is inflated by more than this factor."""
+
+
+class AccelerometerCheck:
+    """The ``bad_acc_vertical`` condition of one estimator's accelerometer, and the noise to
+    use for it (:attr:`noise`): its stated noise while good."""
+
+    __slots__ = ("stated", "noise", "bad", "suspect", "fraction", "_suspect_until",
+                 "_escalated", "_decay", "_decay_dt")
+
+    def __init__(self, stated_noise: float) -> None:
+        self.stated = stated_noise
+        """The accelerometer's stated noise, 1σ (m/s² per sample)."""
+        self.noise = stated_noise
+        """The noise the estimator uses: the stated one, inflated while found too small."""
+        self.bad = False
+        """PX4's ``bad_acc_vertical``: :attr:`noise` more than :data:`BAD` times the stated."""
+        self.suspect = False
+        """True while more than :data:`FRACTION` of the recent steps were inconsistent, and
+        for :data:`PROBATION` after: the height sources' disagreement with the prediction
+        is then the accelerometer's fault, and no source is isolated for it."""
+        self.fraction = 0.0
+        """Exponential average of the inconsistent steps (time constant :data:`WINDOW`)."""
+        self._suspect_until = -math.inf
+        self._escalated = -math.inf
+        self._decay = self._decay_dt = 0.0
+
+    def step(self, judges: tuple[AidSource, ...], now: float, dt: float) -> None:
+        """Update the noise and the condition at the end of a step from the evidence of
+        ``judges`` (the height sources and the GNSS vertical speed)."""
+        weight = min(dt / WINDOW, 1.0)
+        inconsistent = 1.0 if _inconsistent(judges, now) else 0.0
+        self.fraction += weight * (inconsistent - self.fraction)
+        if self.fraction > FRACTION:
+            self._suspect_until = now + PROBATION
+        self.suspect = now <= self._suspect_until
+        if self.fraction > FRACTION and now - self._escalated >= ESCALATION:
+            self.noise, self._escalated = min(GROWTH * self.noise, ACC_CLIP), now
+        elif self.noise != self.stated:
+            if dt != self._decay_dt:
+                self._decay, self._decay_dt = math.exp(-dt / DECAY), dt
+            self.noise = self.stated + self._decay * (self.noise - self.stated)
+            if self.noise < self.stated * (1.0 + 1e-6):
+                self.noise = self.stated
+        self.bad = self.noise > BAD * self.stated
+
+
+def _inconsistent(judges: tuple[AidSource, ...], now: float) -> bool:
+    """True if at least :data:`MIN_SOURCES` recently gated, non-isolated judges (the
+    rangefinders counted as one) disagree with the prediction by more than :data:`SIGMAS`
+    standard deviations, the height sources among them all on one side, and no height
+    source that agrees pins the height tighter than the smallest of their disagreements
+    (a source's resolution, :data:`SIGMAS` standard deviations: a GNSS of 30 m noise cannot
+    tell a 3 m error; a 5 mm laser that agrees with the prediction clears the
+    accelerometer). A height source judges by the
+    mean of its innovations over its bias window (:func:`_evidence`), the GNSS speed by its
+    last innovation, whatever its sign (a noisy accelerometer's speed error and height
+    error need not share theirs)."""
+    sign = 0
+    beyond: set[str] = set()
+    smallest, pinned = math.inf, math.inf
+    for source in judges:
+        if now - source.last_gated > WINDOW or source.isolated:
+            continue
+        evidence = _evidence(source)
+        if evidence is None:
+            continue
+        y, spread = evidence
+        if abs(y) <= SIGMAS * spread:
+            if source.height:
+                pinned = min(pinned, SIGMAS * spread)
+            continue
+        beyond.add(RANGE if source.name in RANGE_SOURCES else source.name)
+        if source.height:
+            side = 1 if y > 0.0 else -1
+            if sign and side != sign:
+                return False
+            sign = side
+            smallest = min(smallest, abs(y))
+    return len(beyond) >= MIN_SOURCES and (smallest == math.inf or pinned >= smallest)
+
+
+def _evidence(source: AidSource) -> tuple[float, float] | None:
+    """How far ``source`` puts the prediction, and that figure's standard deviation: a
+    height source's innovation mean over its bias window and √(S̄/n) (an accelerometer's
+    noise drives the prediction off for seconds: many coarse samples together see what one
+    cannot, a 20 m drift under a 20 m baro), once the window holds
+    :data:`~.fault_detection.BIAS_MIN_SAMPLES`; the last innovation and √S otherwise (the
+    GNSS vertical speed, which has no window); None: too few samples yet."""
+    window = source.window
+    if window.n >= BIAS_MIN_SAMPLES:
+        return window.mean(), math.sqrt(window.mean_variance())
+    if source.height:
+        return None
+    return source.innovation, math.sqrt(max(source.variance, 0.0))

@@ -1,0 +1,143 @@
+"""The accelerometer checked against the height sources (PX4 EKF2's bad_acc_vertical):
+the check on hand-made evidence, then AltitudeEKF on a hover whose accelerometer is 40x
+noisier than it is told (the hover of tests/test_altitude_ekf.py)."""
+
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from altfusion.estimators import accelerometer_check as check
+from altfusion.estimators.accelerometer_check import AccelerometerCheck
+from altfusion.estimators.aid_source import AidSource
+from altfusion.estimators.health import Status
+
+sys.path.insert(0, str(Path(__file__).parent))
+from test_altitude_ekf import STEP, TRUE_H, Flight  # noqa: E402
+
+DT = 0.02
+
+
+def judge(name: str, mean: float, sigma: float, now: float = 0.0) -> AidSource:
+    """An aid source gated at ``now`` whose bias window holds 25 innovations of mean
+    ``mean`` with a standard deviation of that mean of ``sigma``."""
+    source = AidSource(name)
+    variance = 25.0 * sigma**2           # the mean of 25 samples: S/25 = sigma²
+    for k in range(25):
+        source.window.add(now - 0.1 * (24 - k), mean, variance, 2.5)
+    source.innovation, source.variance, source.last_gated = mean, variance, now
+    return source
+
+
+def run(judges: tuple[AidSource, ...], seconds: float, acc: AccelerometerCheck,
+        start: float = 0.0) -> float:
+    """Step ``acc`` for ``seconds`` with ``judges`` as they are (gated at every step)."""
+    now = start
+    for _ in range(round(seconds / DT)):
+        now += DT
+        for source in judges:
+            source.last_gated = now
+        acc.step(judges, now, DT)
+    return now
+
+
+def test_two_height_sources_off_on_one_side_inflate_the_noise_and_flag_it():
+    """Baro and GNSS means 10 standard deviations off, the same side: after WINDOW·ln 2
+    (the fraction's exponential average passes 1/2) the noise is GROWTH x the stated, and
+    GROWTH again ESCALATION later while the evidence stays."""
+    acc = AccelerometerCheck(0.05)
+    judges = (judge("baro", 1.0, 0.1), judge("gps", 2.0, 0.2))
+    run(judges, 0.6, acc)
+    assert acc.noise == 0.05 and not acc.bad                 # 0.6 s < ln 2 = 0.69 s
+    run(judges, 0.2, acc, 0.6)
+    assert acc.noise == pytest.approx(0.05 * check.GROWTH, rel=1e-3)   # decaying since
+    assert acc.bad and acc.suspect
+    run(judges, check.ESCALATION, acc, 0.8)
+    assert acc.noise == pytest.approx(0.05 * check.GROWTH**2, rel=1e-2)   # 3 s of decay
+
+
+@pytest.mark.parametrize("judges", [
+    (("baro", 1.0, 0.1), ("gps", -2.0, 0.2)),                # opposite sides: a source is off
+    (("radar", 1.0, 0.1), ("laser", 1.0, 0.01), ("baro", 0.5, 3.0)),   # a terrain step
+    (("baro", 1.0, 0.1), ("gps", 2.0, 0.2), ("laser", 0.0, 0.01)),     # the laser agrees
+    (("baro", 1.0, 0.1),),                                    # one source alone
+], ids=["opposite-sides", "rangefinders-are-one-judge", "a-precise-source-agrees",
+        "one-source"])
+def test_disagreements_that_do_not_point_at_the_accelerometer(judges):
+    acc = AccelerometerCheck(0.05)
+    run(tuple(judge(*j) for j in judges), 10.0, acc)
+    assert acc.noise == 0.05 and not acc.bad and not acc.suspect
+
+
+def test_the_gnss_speed_counts_whatever_its_sign_and_the_coarse_gnss_cannot_clear():
+    """Baro 10σ off and the GNSS speed 5σ off the other way: two judges (a noisy
+    accelerometer's speed and height errors need not share a sign); a 30 m GNSS that sees
+    nothing does not pin the height to better than the baro's 1 m."""
+    acc = AccelerometerCheck(0.05)
+    speed = AidSource("gps_vz")
+    speed.innovation, speed.variance = -0.5, 0.01
+    run((judge("baro", 1.0, 0.1), judge("gps", 0.0, 6.0), speed), 1.0, acc)
+    assert acc.bad
+
+
+def test_the_inflation_decays_to_the_stated_noise():
+    """Consistent again: the inflation (noise - stated) decays with the time constant DECAY,
+    and the flag clears below BAD x the stated noise."""
+    acc = AccelerometerCheck(0.05)
+    run((judge("baro", 1.0, 0.1), judge("gps", 2.0, 0.2)), 1.0, acc)
+    inflated = acc.noise
+    now = run((judge("baro", 0.0, 0.1), judge("gps", 0.0, 0.2)), 30.0, acc, 1.0)
+    expected = 0.05 + (inflated - 0.05) * math.exp(-30.0 / check.DECAY)
+    assert acc.noise == pytest.approx(expected, rel=1e-3) and acc.bad
+    seconds = check.DECAY * math.log((inflated - 0.05) / (0.05 * (check.BAD - 1.0)))
+    run((judge("baro", 0.0, 0.1), judge("gps", 0.0, 0.2)), seconds - 30.0 + 1.0, acc, now)
+    assert not acc.bad
+
+
+def hover(acc_std: float, seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """AltitudeEKF told an accelerometer of 0.05 m/s² hovering 130 s on one of ``acc_std``
+    (baro every step, GNSS at 10 Hz: tests/test_altitude_ekf.py's sensors); per step of the
+    last 120 s: the height error, h_std, status."""
+    flight = Flight(seed=seed)
+    rows = []
+    for k in range(round(130.0 / STEP)):
+        r = flight.rng.standard_normal(4)
+        samples = {"acc": {"acc_z": acc_std * r[0]},
+                   "baro": {"baro_h": TRUE_H + 0.5 * r[1], "baro_p": 1e5, "baro_T": 288.0}}
+        if k % 5 == 4:
+            samples["gps"] = {"gps_h": TRUE_H + 0.3 * r[2], "gps_vz": 0.1 * r[3],
+                              "gps_vdop": 1.0, "gps_nsat": 10, "gps_fix": True}
+        flight.feed.step(**samples)
+        assert flight.ekf.h_valid
+        if k >= round(10.0 / STEP):
+            rows.append((flight.ekf.h_est - TRUE_H, flight.ekf.h_std, flight.ekf.status))
+    error, std, status = (np.array(c) for c in zip(*rows, strict=True))
+    return error, std, status.astype(np.int64)
+
+
+SEEDS = range(1, 8)
+
+
+def test_an_accelerometer_40x_noisier_than_told_is_flagged_and_the_height_stays_honest():
+    """2 m/s² against a told 0.05, seeds 1-7. Before the check: RMS 0.47-2.85 m, |e| <= 2
+    h_std 17 % of the time over the seeds together. Now the condition is in status at the
+    end of every run (first found 0-31 s in), the RMS is at most 4x the nominal hover's
+    0.05 m (measured 0.07-0.17 m) and |e| <= 2 h_std 0.80 of the time together (0.67-0.90
+    per seed: the lowest where the first detection comes latest; issue 29's target is
+    0.80). The pooled figure's standard error over 7 seeds is 0.09/√7 = 0.034: the bound
+    is the measured 0.80 less 1.5 of it."""
+    covered = []
+    for seed in SEEDS:
+        error, std, status = hover(2.0, seed)
+        assert status[-1] & Status.BAD_ACC_VERTICAL, seed
+        assert np.sqrt(np.mean(error**2)) <= 4.0 * 0.05, seed
+        covered.append(np.abs(error) <= 2.0 * std)
+    assert np.mean(covered) >= 0.75
+
+
+def test_an_accelerometer_as_told_is_never_flagged():
+    for seed in SEEDS:
+        _, _, status = hover(0.05, seed)
+        assert not (status & Status.BAD_ACC_VERTICAL).any(), seed
