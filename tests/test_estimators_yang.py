@@ -213,7 +213,7 @@ def test_an_overconfident_prediction_that_locks_the_heights_out_is_recovered():
     accelerometer, 5x noisier than the paper's σ_a and biased, is what drives the prediction
     off: the accelerometer check finds it inconsistent with both height sources
     (BAD_ACC_VERTICAL), inflates its noise and keeps the sources from being isolated for
-    its fault (measured: 38 m against 0.22 m; before that check the baro was isolated and
+    its fault (measured: 38 m against 0.03 m; before that check the baro was isolated and
     re-admitted with an offset, 3.0 m)."""
     locked, paper = _mems_flight(False)
     error, estimator = _mems_flight(True, P0_acc_bias=0.0, acc_bias_psd=0.0, baro_bias_psd=0.0)

@@ -10,20 +10,20 @@ standard deviation, and on the same side (the prediction is off, not the sources
 height source alone could be off itself; every one at once, together with the GNSS speed
 where there is one, points at the accelerometer.
 
-Check, once per estimator step (PX4 EKF2 ``checkVerticalAccelerationHealth``): the step is
-*inconsistent* when, of the aid sources that judge the prediction (height sources and the
-GNSS vertical speed; isolated ones left out) gated within :data:`WINDOW`, at least
-:data:`MIN_SOURCES` disagree with the prediction by more than :data:`SIGMAS` standard
-deviations, all on one side, and none of the others pins the prediction tighter than those
-disagreements (a source that precise and consistent says the prediction is right). A
-height source's disagreement is the mean of its innovations over its bias window (over
-seconds, many coarse samples see a drift no single one can), the GNSS speed's its last
-innovation. The accelerometer's noise is too small for what the
-prediction shows when more than :data:`FRACTION` of the steps of the last :data:`WINDOW` (an
-exponential average of that time constant) were inconsistent.
+Check, every :data:`PERIOD` (PX4 EKF2 ``checkVerticalAccelerationHealth``, at every IMU
+sample): the prediction is *inconsistent* when, of the aid sources that judge it (height
+sources and the GNSS vertical speed; isolated ones left out) gated within :data:`WINDOW`, at
+least :data:`MIN_SOURCES` independent ones disagree with it by more than :data:`SIGMAS`
+standard deviations, the height sources among them on one side, and none of the others pins
+it tighter than those disagreements (a source that precise and consistent says the
+prediction is right). A height source's disagreement is the mean of its innovations over
+its bias window (over seconds, many coarse samples see a drift no single one can), the GNSS
+speed's its last innovation. The accelerometer's noise is too small for what the
+prediction shows when more than :data:`FRACTION` of the checks of the last :data:`WINDOW`
+(an exponential average of that time constant) were inconsistent.
 
 Then its noise is inflated, by :data:`GROWTH` at most every :data:`ESCALATION` while the
-steps stay inconsistent, up to the accelerometer's clipping level (an accelerometer noisier
+checks stay inconsistent, up to the accelerometer's clipping level (an accelerometer noisier
 than that measures nothing), and returns to the stated noise with the time constant
 :data:`DECAY` (a bounded innovation-based adaptation, after Mehra: the noise settles just
 above the level the innovations show). The estimator reads
@@ -44,20 +44,25 @@ from altfusion.estimators.aid_source import AidSource
 from altfusion.estimators.fault_detection import BIAS_MIN_SAMPLES
 from altfusion.estimators.streams import ACC_CLIP
 
+PERIOD = 0.1
+"""The check runs at most this often, s (at every estimator step when that is longer): its
+evidence moves over seconds, and a check at every 10 ms step would cost a fifth of
+YangFusionKF's step."""
+
 SIGMAS = 3.0
 """An innovation beyond this many standard deviations counts against the prediction (PX4
 EKF2's vertical innovation test limit, 3)."""
 
 WINDOW = 1.0
-"""Time constant of the fraction of inconsistent steps, and how recent a source's last
+"""Time constant of the fraction of inconsistent checks, and how recent a source's last
 gated sample must be to count, s (PX4: the clipping fraction over the past 1 s)."""
 
 FRACTION = 0.5
-"""The accelerometer is bad when more than this fraction of the recent steps was
+"""The accelerometer is bad when more than this fraction of the recent checks was
 inconsistent (PX4: more than 50 % clipped samples in the past 1 s)."""
 
 PROBATION = 10.0
-"""The accelerometer stays suspect this long after the last time the steps were found
+"""The accelerometer stays suspect this long after the last time the checks found it
 inconsistent, s (PX4 BADACC_PROBATION): long enough for the inflated noise to bring the
 prediction back onto the sources before any of them can be isolated for its fault."""
 
@@ -70,7 +75,7 @@ RANGE, RANGE_SOURCES = "range", ("radar", "laser")
 step moves both of their innovations as an accelerometer error would."""
 
 GROWTH = 4.0
-"""Factor of the noise's inflation at each :data:`ESCALATION` over which the steps stay
+"""Factor of the noise's inflation at each :data:`ESCALATION` over which the checks stay
 inconsistent."""
 
 ESCALATION = 3.0
@@ -93,7 +98,7 @@ class AccelerometerCheck:
     use for it (:attr:`noise`): its stated noise while good."""
 
     __slots__ = ("stated", "noise", "bad", "suspect", "fraction", "_suspect_until",
-                 "_escalated", "_decay", "_decay_dt")
+                 "_escalated", "_last", "_decay", "_decay_dt")
 
     def __init__(self, stated_noise: float) -> None:
         self.stated = stated_noise
@@ -103,29 +108,36 @@ class AccelerometerCheck:
         self.bad = False
         """PX4's ``bad_acc_vertical``: :attr:`noise` more than :data:`BAD` times the stated."""
         self.suspect = False
-        """True while more than :data:`FRACTION` of the recent steps were inconsistent, and
+        """True while more than :data:`FRACTION` of the recent checks were inconsistent, and
         for :data:`PROBATION` after: the height sources' disagreement with the prediction
         is then the accelerometer's fault, and no source is isolated for it."""
         self.fraction = 0.0
-        """Exponential average of the inconsistent steps (time constant :data:`WINDOW`)."""
+        """Exponential average of the inconsistent checks (time constant :data:`WINDOW`)."""
         self._suspect_until = -math.inf
         self._escalated = -math.inf
+        self._last = -math.inf
+        """Time of the last check."""
         self._decay = self._decay_dt = 0.0
 
-    def step(self, judges: tuple[AidSource, ...], now: float, dt: float) -> None:
-        """Update the noise and the condition at the end of a step from the evidence of
-        ``judges`` (the height sources and the GNSS vertical speed)."""
-        weight = min(dt / WINDOW, 1.0)
+    def step(self, judges: tuple[AidSource, ...], now: float) -> None:
+        """At the end of an estimator step: every :data:`PERIOD`, update the noise and the
+        condition from the evidence of ``judges`` (the height sources and the GNSS vertical
+        speed)."""
+        elapsed = now - self._last
+        if elapsed < PERIOD * (1.0 - 1e-9):
+            return
+        self._last = now
+        elapsed = min(elapsed, PERIOD if elapsed == math.inf else WINDOW)   # the first: one
         inconsistent = 1.0 if _inconsistent(judges, now) else 0.0
-        self.fraction += weight * (inconsistent - self.fraction)
+        self.fraction += elapsed / WINDOW * (inconsistent - self.fraction)
         if self.fraction > FRACTION:
             self._suspect_until = now + PROBATION
         self.suspect = now <= self._suspect_until
         if self.fraction > FRACTION and now - self._escalated >= ESCALATION:
             self.noise, self._escalated = min(GROWTH * self.noise, ACC_CLIP), now
         elif self.noise != self.stated:
-            if dt != self._decay_dt:
-                self._decay, self._decay_dt = math.exp(-dt / DECAY), dt
+            if elapsed != self._decay_dt:
+                self._decay, self._decay_dt = math.exp(-elapsed / DECAY), elapsed
             self.noise = self.stated + self._decay * (self.noise - self.stated)
             if self.noise < self.stated * (1.0 + 1e-6):
                 self.noise = self.stated
@@ -139,23 +151,33 @@ def _inconsistent(judges: tuple[AidSource, ...], now: float) -> bool:
     source that agrees pins the height tighter than the smallest of their disagreements
     (a source's resolution, :data:`SIGMAS` standard deviations: a GNSS of 30 m noise cannot
     tell a 3 m error; a 5 mm laser that agrees with the prediction clears the
-    accelerometer). A height source judges by the
-    mean of its innovations over its bias window (:func:`_evidence`), the GNSS speed by its
-    last innovation, whatever its sign (a noisy accelerometer's speed error and height
-    error need not share theirs)."""
+    accelerometer).
+
+    A height source judges by the mean ȳ of its innovations over its bias window and that
+    mean's variance S̄/n, once the window holds
+    :data:`~.fault_detection.BIAS_MIN_SAMPLES` (an accelerometer's noise drives the
+    prediction off for seconds: many coarse samples together see what one cannot, a 20 m
+    drift under a 20 m baro); the GNSS vertical speed, which has no window, by its last
+    innovation and its variance, whatever its sign (a noisy accelerometer's speed error
+    and height error need not share theirs). Compared squared: this runs at every step."""
     sign = 0
     beyond: set[str] = set()
-    smallest, pinned = math.inf, math.inf
+    smallest, pinned = math.inf, math.inf             # squared
     for source in judges:
-        if now - source.last_gated > WINDOW or source.isolated:
+        if now - source.last_gated > WINDOW or source.bits & source.isolated_mask:
             continue
-        evidence = _evidence(source)
-        if evidence is None:
+        window = source.window
+        n = len(window.samples)
+        if n >= BIAS_MIN_SAMPLES:
+            y, variance = window.sum_y / n, max(window.sum_S, 0.0) / (n * n)
+        elif source.height:
             continue
-        y, spread = evidence
-        if abs(y) <= SIGMAS * spread:
-            if source.height:
-                pinned = min(pinned, SIGMAS * spread)
+        else:
+            y, variance = source.innovation, max(source.variance, 0.0)
+        bound = SIGMAS * SIGMAS * variance
+        if y * y <= bound:
+            if source.height and bound < pinned:
+                pinned = bound
             continue
         beyond.add(RANGE if source.name in RANGE_SOURCES else source.name)
         if source.height:
@@ -163,20 +185,5 @@ def _inconsistent(judges: tuple[AidSource, ...], now: float) -> bool:
             if sign and side != sign:
                 return False
             sign = side
-            smallest = min(smallest, abs(y))
-    return len(beyond) >= MIN_SOURCES and (smallest == math.inf or pinned >= smallest)
-
-
-def _evidence(source: AidSource) -> tuple[float, float] | None:
-    """How far ``source`` puts the prediction, and that figure's standard deviation: a
-    height source's innovation mean over its bias window and √(S̄/n) (an accelerometer's
-    noise drives the prediction off for seconds: many coarse samples together see what one
-    cannot, a 20 m drift under a 20 m baro), once the window holds
-    :data:`~.fault_detection.BIAS_MIN_SAMPLES`; the last innovation and √S otherwise (the
-    GNSS vertical speed, which has no window); None: too few samples yet."""
-    window = source.window
-    if window.n >= BIAS_MIN_SAMPLES:
-        return window.mean(), math.sqrt(window.mean_variance())
-    if source.height:
-        return None
-    return source.innovation, math.sqrt(max(source.variance, 0.0))
+            smallest = min(smallest, y * y)
+    return len(beyond) >= MIN_SOURCES and pinned >= smallest

@@ -203,7 +203,7 @@ class Estimator(SampleIntake, Gating, Component):
         self.propagate(self.dt)
         self.fuse_samples(self.due_samples())
         if self.acc_check is not None and self.started:
-            self.acc_check.step(self._judges, self.time, self.dt)
+            self.acc_check.step(self._judges, self.time)
         self._publish_health()
 
     def _publish_health(self) -> None:
