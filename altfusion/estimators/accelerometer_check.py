@@ -1,14 +1,17 @@
 """The vertical accelerometer checked against every height source (PX4 EKF2's
 ``bad_acc_vertical``), with its noise inflated while it is found bad.
 
-An estimator that integrates an accelerometer (AltitudeEKF, as its input) or fuses it
-(YangFusionKF, as a measurement of the acceleration) trusts it for the motion between height
-samples. An accelerometer much noisier than its stated noise (vibration, a loose mount,
-clipping) drives the prediction off while the filter's variances stay small: every height
-source then disagrees with the prediction at once, each far beyond its own innovation
-standard deviation, and on the same side (the prediction is off, not the sources). One
-height source alone could be off itself; every one at once, together with the GNSS speed
-where there is one, points at the accelerometer.
+An estimator that integrates an accelerometer (AltitudeEKF, as its input) trusts it for the
+motion between height samples. An accelerometer much noisier than its stated noise
+(vibration, a loose mount, clipping) drives the prediction off while the filter's variances
+stay small: every height source then disagrees with the prediction at once, each far beyond
+its own innovation standard deviation, and on the same side (the prediction is off, not the
+sources). One height source alone could be off itself; every one at once, together with the
+GNSS speed where there is one, points at the accelerometer.
+
+Only for an accelerometer that is the prediction's input: where it is a measurement of an
+acceleration state driven by a white jerk (YangFusionKF), inflating it leaves a motion
+model that lags every acceleration step, and the lag reads as a bad accelerometer.
 
 Check, every :data:`PERIOD` (PX4 EKF2 ``checkVerticalAccelerationHealth``, at every IMU
 sample): the prediction is *inconsistent* when, of the aid sources that judge it (height
@@ -46,8 +49,8 @@ from altfusion.estimators.streams import ACC_CLIP
 
 PERIOD = 0.1
 """The check runs at most this often, s (at every estimator step when that is longer): its
-evidence moves over seconds, and a check at every 10 ms step would cost a fifth of
-YangFusionKF's step."""
+evidence moves over seconds, and a check at every 10 ms step cost 10 µs, a fifth of an
+estimator's step."""
 
 SIGMAS = 3.0
 """An innovation beyond this many standard deviations counts against the prediction (PX4

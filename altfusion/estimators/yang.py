@@ -46,9 +46,6 @@ not in the paper; ``docs/estimators.md`` says which fault-suite scenario each pa
 
 * the GPS vertical speed gated against √(P_vv + σ_v²); rejected for ``reset_timeout``, the
   speed resets onto it (PX4's velocity reset);
-* a bad accelerometer (PX4 EKF2's ``bad_acc_vertical``,
-  :mod:`~altfusion.estimators.accelerometer_check`): the IMU row's variance inflated while
-  every height source disagrees with the prediction;
 * accelerometer bias: the IMU row measures a + b, b a fourth state, a random walk of
   spectral density ``acc_bias_psd`` from 0 with variance ``P0_acc_bias`` (PX4 EKF2's
   EKF2_ACC_B_NOISE and EKF2_ABIAS_INIT), observable through the GPS vertical speed;
@@ -312,15 +309,9 @@ class YangFusionKF(Estimator):
             x, P, _ = update_scalar(x, P, row, gps["gps_vz"] - sparse_dot(x, row), p.R_gps_vz)
         if acc is not None:
             self.accept(self.aid["acc"])
-            check = self.acc_check
             x, P, _ = update_scalar(x, P, ACC_BIAS_ROW, acc["acc_z"] - x[2] - x[ACC_BIAS],
-                                    check.noise**2 if check.bad else p.R_acc)
+                                    p.R_acc)
         self.x, self.P = x, P
-
-    def accelerometer_noise(self) -> float:
-        """σ_a of eq. (12)'s IMU row: checked, and inflated while found bad, in the fault
-        layer (:mod:`~altfusion.estimators.accelerometer_check`)."""
-        return math.sqrt(self.params.R_acc)
 
     def _speed_passes(self, vz: float, lag: float) -> bool:
         """The gate on the GPS vertical speed against the predicted speed at its instant,
