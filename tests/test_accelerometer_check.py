@@ -34,12 +34,13 @@ def judge(name: str, mean: float, sigma: float, now: float = 0.0) -> AidSource:
 def run(judges: tuple[AidSource, ...], seconds: float, acc: AccelerometerCheck,
         start: float = 0.0) -> float:
     """Step ``acc`` for ``seconds`` with ``judges`` as they are (gated at every step)."""
+    acc.judges = judges
     now = start
     for _ in range(round(seconds / DT)):
         now += DT
         for source in judges:
             source.last_gated = now
-        acc.step(judges, now)
+        acc.step(now)
     return now
 
 
@@ -47,7 +48,7 @@ def test_two_height_sources_off_on_one_side_inflate_the_noise_and_flag_it():
     """Baro and GNSS means 10 standard deviations off, the same side: after WINDOW·ln 2
     (the fraction's exponential average passes 1/2) the noise is GROWTH x the stated, and
     GROWTH again ESCALATION later while the evidence stays."""
-    acc = AccelerometerCheck(0.05)
+    acc = AccelerometerCheck(0.05, ())
     judges = (judge("baro", 1.0, 0.1), judge("gps", 2.0, 0.2))
     run(judges, 0.6, acc)
     assert acc.noise == 0.05 and not acc.bad                 # 0.6 s < ln 2 = 0.69 s
@@ -66,7 +67,7 @@ def test_two_height_sources_off_on_one_side_inflate_the_noise_and_flag_it():
 ], ids=["opposite-sides", "rangefinders-are-one-judge", "a-precise-source-agrees",
         "one-source"])
 def test_disagreements_that_do_not_point_at_the_accelerometer(judges):
-    acc = AccelerometerCheck(0.05)
+    acc = AccelerometerCheck(0.05, ())
     run(tuple(judge(*j) for j in judges), 10.0, acc)
     assert acc.noise == 0.05 and not acc.bad and not acc.suspect
 
@@ -75,7 +76,7 @@ def test_the_gnss_speed_counts_whatever_its_sign_and_the_coarse_gnss_cannot_clea
     """Baro 10σ off and the GNSS speed 5σ off the other way: two judges (a noisy
     accelerometer's speed and height errors need not share a sign); a 30 m GNSS that sees
     nothing does not pin the height to better than the baro's 1 m."""
-    acc = AccelerometerCheck(0.05)
+    acc = AccelerometerCheck(0.05, ())
     speed = AidSource("gps_vz")
     speed.innovation, speed.variance = -0.5, 0.01
     run((judge("baro", 1.0, 0.1), judge("gps", 0.0, 6.0), speed), 1.0, acc)
@@ -85,7 +86,7 @@ def test_the_gnss_speed_counts_whatever_its_sign_and_the_coarse_gnss_cannot_clea
 def test_the_inflation_decays_to_the_stated_noise():
     """Consistent again: the inflation (noise - stated) decays with the time constant DECAY,
     and the flag clears below BAD x the stated noise."""
-    acc = AccelerometerCheck(0.05)
+    acc = AccelerometerCheck(0.05, ())
     run((judge("baro", 1.0, 0.1), judge("gps", 2.0, 0.2)), 1.0, acc)
     inflated = acc.noise
     now = run((judge("baro", 0.0, 0.1), judge("gps", 0.0, 0.2)), 30.0, acc, 1.0)

@@ -100,10 +100,13 @@ class AccelerometerCheck:
     """The ``bad_acc_vertical`` condition of one estimator's accelerometer, and the noise to
     use for it (:attr:`noise`): its stated noise while good."""
 
-    __slots__ = ("stated", "noise", "bad", "suspect", "fraction", "_suspect_until",
+    __slots__ = ("judges", "stated", "noise", "bad", "suspect", "fraction", "_suspect_until",
                  "_escalated", "_last", "_decay", "_decay_dt")
 
-    def __init__(self, stated_noise: float) -> None:
+    def __init__(self, stated_noise: float, judges: tuple[AidSource, ...]) -> None:
+        self.judges = judges
+        """The aid sources that judge the prediction: the height sources and the GNSS
+        vertical speed."""
         self.stated = stated_noise
         """The accelerometer's stated noise, 1σ (m/s² per sample)."""
         self.noise = stated_noise
@@ -122,16 +125,15 @@ class AccelerometerCheck:
         """Time of the last check."""
         self._decay = self._decay_dt = 0.0
 
-    def step(self, judges: tuple[AidSource, ...], now: float) -> None:
+    def step(self, now: float) -> None:
         """At the end of an estimator step: every :data:`PERIOD`, update the noise and the
-        condition from the evidence of ``judges`` (the height sources and the GNSS vertical
-        speed)."""
+        condition from the evidence of :attr:`judges`."""
         elapsed = now - self._last
         if elapsed < PERIOD * (1.0 - 1e-9):
             return
         self._last = now
         elapsed = min(elapsed, PERIOD if elapsed == math.inf else WINDOW)   # the first: one
-        inconsistent = 1.0 if _inconsistent(judges, now) else 0.0
+        inconsistent = 1.0 if _inconsistent(self.judges, now) else 0.0
         self.fraction += elapsed / WINDOW * (inconsistent - self.fraction)
         if self.fraction > FRACTION:
             self._suspect_until = now + PROBATION
@@ -162,17 +164,16 @@ def _inconsistent(judges: tuple[AidSource, ...], now: float) -> bool:
     prediction off for seconds: many coarse samples together see what one cannot, a 20 m
     drift under a 20 m baro); the GNSS vertical speed, which has no window, by its last
     innovation and its variance, whatever its sign (a noisy accelerometer's speed error
-    and height error need not share theirs). Compared squared: this runs at every step."""
+    and height error need not share theirs). Compared squared (no square roots)."""
     sign = 0
     beyond: set[str] = set()
     smallest, pinned = math.inf, math.inf             # squared
     for source in judges:
-        if now - source.last_gated > WINDOW or source.bits & source.isolated_mask:
+        if now - source.last_gated > WINDOW or source.isolated:
             continue
         window = source.window
-        n = len(window.samples)
-        if n >= BIAS_MIN_SAMPLES:
-            y, variance = window.sum_y / n, max(window.sum_S, 0.0) / (n * n)
+        if window.n >= BIAS_MIN_SAMPLES:
+            y, variance = window.mean(), window.mean_variance()
         elif source.height:
             continue
         else:

@@ -155,10 +155,10 @@ class Estimator(SampleIntake, Gating, Component):
         self._heights = tuple(source for source in self.aid_sources if source.height)
         self._last_aiding = -math.inf
         noise = self.accelerometer_noise()
-        self.acc_check = AccelerometerCheck(noise) if (
+        judges = (*self._heights, *(s for s in self.aid_sources if s.name == "gps_vz"))
+        self.acc_check = AccelerometerCheck(noise, judges) if (
             noise is not None and self.params.fault_detection) else None
         """PX4's bad_acc_vertical check of the accelerometer (fault layer; None without)."""
-        self._judges = (*self._heights, *(s for s in self.aid_sources if s.name == "gps_vz"))
         self.initialize_filter()
         self._publish_health()
 
@@ -203,7 +203,7 @@ class Estimator(SampleIntake, Gating, Component):
         self.propagate(self.dt)
         self.fuse_samples(self.due_samples())
         if self.acc_check is not None and self.started:
-            self.acc_check.step(self._judges, self.time)
+            self.acc_check.step(self.time)
         self._publish_health()
 
     def _publish_health(self) -> None:
