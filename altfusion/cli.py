@@ -192,7 +192,7 @@ def command_reproduce(args: argparse.Namespace) -> int:
     options = ReproduceOptions(out=Path(args.out or f"results/reproduce_{args.name}"),
                                runs=args.runs, workers=args.workers, scheduler=args.scheduler,
                                master_seed=args.seed, resume=args.resume, models=args.models,
-                               paper_algorithm=args.paper_algorithm)
+                               paper_algorithm=args.paper_algorithm, backend=args.backend)
     return reproduction(args.name).reproduce(options)
 
 
@@ -254,6 +254,9 @@ def build_parser() -> argparse.ArgumentParser:
     reproduce.add_argument("--paper-algorithm", action="store_true",
                            help="every estimator with fault_detection false (the papers' "
                                 "algorithms, without resets, isolation and bias states)")
+    reproduce.add_argument("--backend", choices=("core", "fmu"), default="core",
+                           help="step the FMUs' core objects in-process (default, same numbers, "
+                                "faster) or through FMI")
     reproduce.add_argument("--out", default=None,
                            help="output folder (default: results/reproduce_NAME)")
     reproduce.set_defaults(handler=command_reproduce)

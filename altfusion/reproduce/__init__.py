@@ -30,6 +30,10 @@ class ReproduceOptions:
     paper_algorithm: bool = False
     """Every estimator with ``fault_detection`` false: the papers' algorithms, without the
     shared health machinery's resets, isolation and bias states."""
+    backend: str = "core"
+    """The runner's backend: "core" (the FMUs' core objects stepped in-process, as
+    ``altfusion evaluate`` does: the same numbers, faster) or "fmu" (every call through
+    FMI)."""
 
 
 def reproduction(name: str):

@@ -72,15 +72,15 @@ class Campaign:
     """Parameter overrides ('component.parameter') in every run."""
 
 
-def campaign_source(campaign: Campaign, models: Path) -> SystemSource:
-    """The SSP of the campaign's system, with its estimator swap."""
+def campaign_source(campaign: Campaign, models: Path, backend: str = "core") -> SystemSource:
+    """The SSP of the campaign's system, with its estimator swap, run on ``backend``."""
     ssp = Path(models) / f"{campaign.system}.ssp"
     if not ssp.is_file():
         raise CampaignError(f"no {ssp}: build the models first (python build_fmu.py)")
     if campaign.estimator is None:
-        return SystemSource.from_path(ssp)
+        return SystemSource.from_path(ssp, backend=backend)
     swap = find_fmu("estimator", campaign.estimator, ssp, read_ssp(ssp).fmu_paths)
-    return SystemSource.from_path(ssp, swap)
+    return SystemSource.from_path(ssp, swap, backend=backend)
 
 
 def paper_algorithm(source: SystemSource) -> dict[str, bool]:
@@ -112,7 +112,7 @@ def _run_each(campaigns: tuple[Campaign, ...], options: ReproduceOptions, defaul
         runs = options.runs if options.runs is not None or resume else default_runs
         print(f"{campaign.label} ({campaign.system}):", file=sys.stderr, flush=True)
         try:
-            source = campaign_source(campaign, options.models)
+            source = campaign_source(campaign, options.models, options.backend)
             parameters = {**(paper_algorithm(source) if options.paper_algorithm else {}),
                           **campaign.parameters}
             outcome = run_campaign(
