@@ -1,6 +1,6 @@
-"""The accelerometer checked against the height sources (PX4 EKF2's bad_acc_vertical):
-the check on hand-made evidence, then AltitudeEKF on a hover whose accelerometer is 40x
-noisier than it is told (the hover of tests/test_altitude_ekf.py)."""
+"""The accelerometer checked against the height sources (PX4 EKF2's bad_acc_vertical) and by
+its own scatter: the checks on hand-made evidence, then AltitudeEKF on a hover whose
+accelerometer is 40x noisier than it is told (the hover of tests/test_altitude_ekf.py)."""
 
 import math
 import sys
@@ -97,6 +97,43 @@ def test_the_inflation_decays_to_the_stated_noise():
     assert not acc.bad
 
 
+def scattered(acc: AccelerometerCheck, values: np.ndarray) -> AccelerometerCheck:
+    """Feed ``values`` to ``acc`` as samples every DT (no judges), checking at every one."""
+    for k, value in enumerate(values):
+        acc.sample(float(value))
+        acc.step((k + 1) * DT)
+    return acc
+
+
+def test_the_scatter_measures_a_white_noise_larger_than_told():
+    """0.5 m/s² of white noise against a told 0.05: the median estimate over 100 second
+    differences, within ±25 % of the truth 19 times in 20 (1.96 x its relative standard
+    error 1.2/√100), is the noise used, and it is flagged; 1e5 m/s² is clipped at the
+    accelerometer's clipping level."""
+    rng = np.random.default_rng(3)
+    acc = scattered(AccelerometerCheck(0.05, ()), 0.5 * rng.standard_normal(300))
+    assert acc.noise == pytest.approx(0.5, rel=0.25) and acc.bad
+    acc = scattered(AccelerometerCheck(0.05, ()), 1e5 * rng.standard_normal(300))
+    assert acc.noise == check.ACC_CLIP
+
+
+def test_the_scatter_leaves_an_accelerometer_as_told_and_its_manoeuvres_alone():
+    """Noise as told (0.05 m/s²) on a flight of acceleration steps of ±5 m/s² every second
+    and a steady jerk of 2 m/s³ in between: a steady jerk cancels in the second difference
+    and each step makes two outliers of 100, which the median ignores; an estimate within
+    ±12 % (one relative standard error) stays under MARGIN = 1.5x. The noise stays the stated
+    one, exactly, at every check."""
+    rng = np.random.default_rng(4)
+    t = DT * np.arange(1500)
+    flight = 5.0 * np.sign(np.sin(np.pi * t)) + 2.0 * (t % 1.0)
+    acc = AccelerometerCheck(0.05, ())
+    for k, value in enumerate(flight + 0.05 * rng.standard_normal(t.size)):
+        acc.sample(float(value))
+        acc.step((k + 1) * DT)
+        assert acc.noise == 0.05 and not acc.bad, k
+    assert acc.scatter == pytest.approx(0.05, rel=0.25)
+
+
 def hover(acc_std: float, seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """AltitudeEKF told an accelerometer of 0.05 m/s² hovering 130 s on one of ``acc_std``
     (baro every step, GNSS at 10 Hz: tests/test_altitude_ekf.py's sensors); per step of the
@@ -123,20 +160,17 @@ SEEDS = range(1, 8)
 
 def test_an_accelerometer_40x_noisier_than_told_is_flagged_and_the_height_stays_honest():
     """2 m/s² against a told 0.05, seeds 1-7. Before the check: RMS 0.47-2.85 m, |e| <= 2
-    h_std 17 % of the time over the seeds together. Now the condition is in status at the
-    end of every run (first found 0-31 s in), the RMS is at most 4x the nominal hover's
-    0.05 m (measured 0.10-0.17 m) and |e| <= 2 h_std 0.76 of the time together (0.61-0.90
-    per seed: the lowest where the first detection comes late or the inflation settles
-    low). Issue 29's target is 0.80: not met. The pooled figure's standard error over 7
-    seeds is 0.11/√7 = 0.04: the bound is the measured 0.76 less one of it, so that the
-    test fails if the check stops finding the accelerometer (0.17)."""
-    covered = []
+    h_std 17 % of the time over the seeds together; with the height sources' judgement alone
+    0.76 (first found 0-31 s in). With the samples' scatter the noise is measured within
+    the first second: the condition is in status from then on, the RMS is the nominal
+    hover's (0.05 m as told; measured 0.050-0.059 m) and |e| <= 2 h_std 0.93-0.97 of the time
+    per seed (the issue's target: 0.80). Bounds: the spec's honest band, 85-99.5 %, for
+    every seed; the RMS within 1.5x the nominal 0.05 m."""
     for seed in SEEDS:
         error, std, status = hover(2.0, seed)
-        assert status[-1] & Status.BAD_ACC_VERTICAL, seed
-        assert np.sqrt(np.mean(error**2)) <= 4.0 * 0.05, seed
-        covered.append(np.abs(error) <= 2.0 * std)
-    assert np.mean(covered) >= 0.72
+        assert (status & Status.BAD_ACC_VERTICAL).all(), seed
+        assert np.sqrt(np.mean(error**2)) <= 1.5 * 0.05, seed
+        assert 0.85 <= np.mean(np.abs(error) <= 2.0 * std) <= 0.995, seed
 
 
 def test_an_accelerometer_as_told_is_never_flagged():

@@ -229,7 +229,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'estimator': '525d13579af2ee59',
     },
     ('yang2020_altitude_ekf', True): {
-        'estimator': 'fc6aefa5002a7fbc',
+        'estimator': 'be395a5acbf8314c',
     },
     ('yang2020_altitude_ekf', False): {
         'estimator': 'fc6aefa5002a7fbc',

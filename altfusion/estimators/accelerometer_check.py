@@ -9,9 +9,21 @@ its own innovation standard deviation, and on the same side (the prediction is o
 sources). One height source alone could be off itself; every one at once, together with the
 GNSS speed where there is one, points at the accelerometer.
 
-Only for an accelerometer that is the prediction's input: where it is a measurement of an
-acceleration state driven by a white jerk (YangFusionKF), inflating it leaves a motion
-model that lags every acceleration step, and the lag reads as a bad accelerometer.
+Two kinds of evidence, both bounded innovation-based adaptation after Mehra (the noise settles
+where the evidence puts it, never below the stated noise):
+
+* **the accelerometer's own scatter**, for any estimator that reads one: its noise measured
+  from the spread of the second differences of its last :data:`SCATTER_SAMPLES` samples
+  (a robust estimate: the median absolute second difference, which a manoeuvre's steps
+  and a steady jerk leave alone; see :func:`scatter_noise`). A noise more
+  than :data:`MARGIN` times the stated is used instead of it. This finds white noise (vibration, a
+  loose mount) within a second, before the prediction has drifted;
+* **the height sources' disagreement with the prediction**, only for an accelerometer that
+  is the prediction's input (AltitudeEKF), which finds an error the scatter cannot see (one
+  that is not white: a wandering error, clipping). Where the accelerometer is a measurement
+  of an acceleration state driven by a white jerk (YangFusionKF), inflating it leaves a
+  motion model that lags every acceleration step, and the lag reads as a bad accelerometer:
+  there only the scatter counts.
 
 Check, every :data:`PERIOD` (PX4 EKF2 ``checkVerticalAccelerationHealth``, at every IMU
 sample): the prediction is *inconsistent* when, of the aid sources that judge it (height
@@ -28,20 +40,23 @@ prediction shows when more than :data:`FRACTION` of the checks of the last :data
 Then its noise is inflated, by :data:`GROWTH` at most every :data:`ESCALATION` while the
 checks stay inconsistent, up to the accelerometer's clipping level (an accelerometer noisier
 than that measures nothing), and returns to the stated noise with the time constant
-:data:`DECAY` (a bounded innovation-based adaptation, after Mehra: the noise settles just
-above the level the innovations show). The estimator reads
-:attr:`AccelerometerCheck.noise` where it used its stated noise; ``status`` carries the
-bit ``BAD_ACC_VERTICAL`` (PX4's ``bad_acc_vertical``) while the noise is inflated by
-more than :data:`BAD`.
+:data:`DECAY` (the noise settles just above the level the innovations show). The estimator
+reads :attr:`AccelerometerCheck.noise` (the larger of the two kinds' noises) where it used
+its stated noise; ``status`` carries the bit ``BAD_ACC_VERTICAL`` (PX4's
+``bad_acc_vertical``) while the noise is more than :data:`BAD` times the stated.
 
 Deviations from PX4: PX4 requires clipping evidence unless GNSS speed and height are both
 available, holds the flag for 10 s (``BADACC_PROBATION``) and inflates the noise to one
 fixed level (``BADACC_BIAS_PNOISE``, 4.9 m/s²); here any two independent judges suffice (two
 height sources are independent of each other) and the inflation follows the evidence (a
-40x noisier accelerometer needs 2 m/s², a 10 m/s² one twice PX4's level).
+40x noisier accelerometer needs 2 m/s², a 10 m/s² one twice PX4's level). PX4 measures the
+IMU's vibration (``accel_vibration_metric``) but does not use it in the filter; here the
+scatter sets the noise.
 """
 
 import math
+import statistics
+from collections import deque
 
 from altfusion.estimators.aid_source import AidSource
 from altfusion.estimators.fault_detection import BIAS_MIN_SAMPLES
@@ -95,18 +110,41 @@ BAD = 2.0
 """The accelerometer is reported bad (``status`` bit ``BAD_ACC_VERTICAL``) while its noise
 is inflated by more than this factor."""
 
+SCATTER_SAMPLES = 100
+"""Second differences of consecutive samples the scatter is taken over (1 s at 100 Hz); no
+estimate before there are as many."""
+
+SECOND_DIFFERENCE_MAD = 0.6744897501960817 * math.sqrt(6.0)
+"""Median of |a_k - 2a_(k-1) + a_(k-2)| for white noise of σ = 1: the second difference of
+white noise is normal with variance (1 + 4 + 1)σ², and the median of |N(0, 1)| is
+Φ⁻¹(3/4)."""
+
+MARGIN = 3.0
+"""The measured scatter replaces the stated noise only beyond this factor of it (the
+accelerometer is then also reported bad, :data:`BAD`). Over :data:`SCATTER_SAMPLES` second
+differences the estimate of white noise has a relative standard error of 14 % (simulated:
+0.138, 99.9th percentile 1.49). The vehicle's motion between samples adds to it: a steady
+jerk cancels and a manoeuvre's few steps are outliers the median ignores, but a closed
+loop's thrust, changed at every controller step, is steps at every other sample: in
+yang2020's closed-loop flight its 0.01 m/s² accelerometer scatters as 0.0125 m/s² (median
+over the flight; at most 0.0198, 2x). A third difference does not help (0.0136, at most
+0.021), and minus the lag-1 autocovariance of the first differences, unbiased for a
+random-walk acceleration, scatters more (at most 0.032). So an accelerometer is measured
+once it is 3x noisier than stated."""
+
 
 class AccelerometerCheck:
     """The ``bad_acc_vertical`` condition of one estimator's accelerometer, and the noise to
     use for it (:attr:`noise`): its stated noise while good."""
 
-    __slots__ = ("judges", "stated", "noise", "bad", "suspect", "fraction", "_suspect_until",
-                 "_escalated", "_last", "_decay", "_decay_dt")
+    __slots__ = ("judges", "stated", "noise", "bad", "suspect", "fraction", "scatter",
+                 "_inflated", "_suspect_until", "_escalated", "_last", "_decay", "_decay_dt",
+                 "_differences", "_last_samples")
 
     def __init__(self, stated_noise: float, judges: tuple[AidSource, ...]) -> None:
         self.judges = judges
         """The aid sources that judge the prediction: the height sources and the GNSS
-        vertical speed."""
+        vertical speed (none: only the scatter is checked)."""
         self.stated = stated_noise
         """The accelerometer's stated noise, 1σ (m/s² per sample)."""
         self.noise = stated_noise
@@ -119,15 +157,32 @@ class AccelerometerCheck:
         is then the accelerometer's fault, and no source is isolated for it."""
         self.fraction = 0.0
         """Exponential average of the inconsistent checks (time constant :data:`WINDOW`)."""
+        self.scatter = 0.0
+        """The noise measured from the samples' scatter (:func:`scatter_noise`; 0 until
+        :data:`SCATTER_SAMPLES` second differences)."""
+        self._inflated = stated_noise
+        """The noise the height sources' disagreement calls for (decaying to the stated)."""
+        self._differences: deque[float] = deque(maxlen=SCATTER_SAMPLES)
+        self._last_samples = (math.nan, math.nan)
+        """The last two samples, the latest first."""
         self._suspect_until = -math.inf
         self._escalated = -math.inf
         self._last = -math.inf
         """Time of the last check."""
         self._decay = self._decay_dt = 0.0
 
+    def sample(self, acc_z: float) -> None:
+        """An accelerometer sample (m/s²), in order: its second difference joins the
+        scatter's (from the third sample on)."""
+        a1, a2 = self._last_samples
+        difference = abs(acc_z - 2.0 * a1 + a2)
+        if difference == difference:                    # not NaN
+            self._differences.append(difference)
+        self._last_samples = (acc_z, a1)
+
     def step(self, now: float) -> None:
         """At the end of an estimator step: every :data:`PERIOD`, update the noise and the
-        condition from the evidence of :attr:`judges`."""
+        condition from the samples' scatter and the evidence of :attr:`judges`."""
         elapsed = now - self._last
         if elapsed < PERIOD * (1.0 - 1e-9):
             return
@@ -139,14 +194,25 @@ class AccelerometerCheck:
             self._suspect_until = now + PROBATION
         self.suspect = now <= self._suspect_until
         if self.fraction > FRACTION and now - self._escalated >= ESCALATION:
-            self.noise, self._escalated = min(GROWTH * self.noise, ACC_CLIP), now
-        elif self.noise != self.stated:
+            self._inflated, self._escalated = min(GROWTH * self.noise, ACC_CLIP), now
+        elif self._inflated != self.stated:
             if elapsed != self._decay_dt:
                 self._decay, self._decay_dt = math.exp(-elapsed / DECAY), elapsed
-            self.noise = self.stated + self._decay * (self.noise - self.stated)
-            if self.noise < self.stated * (1.0 + 1e-6):
-                self.noise = self.stated
+            self._inflated = self.stated + self._decay * (self._inflated - self.stated)
+            if self._inflated < self.stated * (1.0 + 1e-6):
+                self._inflated = self.stated
+        if len(self._differences) == SCATTER_SAMPLES:
+            self.scatter = scatter_noise(self._differences)
+        measured = min(self.scatter, ACC_CLIP) if self.scatter > MARGIN * self.stated else 0.0
+        self.noise = max(self._inflated, measured)
         self.bad = self.noise > BAD * self.stated
+
+
+def scatter_noise(differences) -> float:
+    """The white noise (1σ) of samples whose absolute second differences are
+    ``differences``: their median over :data:`SECOND_DIFFERENCE_MAD` (the median absolute
+    deviation's estimate of σ, robust to the few large differences of a manoeuvre)."""
+    return statistics.median(differences) / SECOND_DIFFERENCE_MAD
 
 
 def _inconsistent(judges: tuple[AidSource, ...], now: float) -> bool:

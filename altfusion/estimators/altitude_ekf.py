@@ -215,6 +215,8 @@ class AltitudeEKF(Estimator):
         previous = self._acc
         if acc_sample is not None:
             self._acc = (acc_sample["acc_time"], acc_sample["acc_z"])
+            if self.acc_check is not None:
+                self.acc_check.sample(self._acc[1])
             if previous is not None and self._acc[0] > previous[0]:
                 self._acc_period = min(self._acc[0] - previous[0], p.acc_timeout)
         acc_on = self._acc is not None and now - self._acc[0] <= p.acc_timeout

@@ -101,6 +101,10 @@ class Estimator(SampleIntake, Gating, Component):
     ungated one) and implement :meth:`reset_height`.
     """
 
+    acc_drives_prediction: ClassVar[bool] = True
+    """The accelerometer is the prediction's input: the height sources' disagreement with the
+    prediction judges it too (else only its scatter: :mod:`.accelerometer_check`)."""
+
     stated_aliases: ClassVar[dict[str, str]] = {}
     """A sensor error model's stated name (``baro_bias_psd``... of
     :mod:`altfusion.systems.error_models`) -> this estimator's parameter of the same quantity
@@ -155,7 +159,8 @@ class Estimator(SampleIntake, Gating, Component):
         self._heights = tuple(source for source in self.aid_sources if source.height)
         self._last_aiding = -math.inf
         noise = self.accelerometer_noise()
-        judges = (*self._heights, *(s for s in self.aid_sources if s.name == "gps_vz"))
+        judges = (*self._heights, *(s for s in self.aid_sources if s.name == "gps_vz")) \
+            if self.acc_drives_prediction else ()
         self.acc_check = AccelerometerCheck(noise, judges) if (
             noise is not None and self.params.fault_detection) else None
         """PX4's bad_acc_vertical check of the accelerometer (fault layer; None without)."""

@@ -58,6 +58,9 @@ not in the paper; ``docs/estimators.md`` says which fault-suite scenario each pa
   paper): a sixth state g from 0 (known), the GPS fused as h + g and gated and re-admitted
   like the baro. Only where another absolute height exists (a radio altimeter over known
   terrain): with baro and GPS both relative the height would drift;
+* the accelerometer's noise measured from its samples' scatter and used in the IMU row when
+  it is more than 1.5x σ_a (:mod:`~altfusion.estimators.accelerometer_check`; only the
+  scatter: the height sources' disagreement does not judge it here, see docs/estimators.md);
 * isolation, height resets and re-referencing (:mod:`~altfusion.estimators.fault_detection`):
   an isolated baro or GPS with a constant offset is re-admitted with its offset state reset
   onto it (:meth:`YangFusionKF.reset_offset`); a height reset moves h onto the sample and the
@@ -198,6 +201,7 @@ class YangFusionKF(Estimator):
 
     Params = YangParams
     streams = (BARO, GPS_VZ, RADAR, ACC)
+    acc_drives_prediction = False
 
     def configure(self, clock) -> None:
         """The states (Ω of eq. 9; with ``fault_detection`` the accelerometer bias, the baro
@@ -210,7 +214,9 @@ class YangFusionKF(Estimator):
             walks = (p.acc_bias_psd * dt, p.baro_bias_psd * dt,
                      *((p.gps_bias_psd * dt,) if p.gps_bias_psd > 0.0 else ()))
         self._n = 3 + len(walks)
+        self._walks = walks
         self._Q = constant_states_noise(white_jerk_noise(dt, p.jerk_psd), walks)
+        self._Q_noise = math.sqrt(p.R_acc)
         self._height_rows = {name: (*HEIGHT_ROW, *(((OFFSET_STATE[name], 1.0),)
                                                    if OFFSET_STATE.get(name, self._n) < self._n
                                                    else ()))
@@ -232,6 +238,11 @@ class YangFusionKF(Estimator):
     def propagate(self, dt: float) -> None:
         """Eqs. (9)-(11) with the white-jerk process noise (A of eq. 9 is the constant-
         acceleration model, written out in scalar arithmetic)."""
+        check = self.acc_check
+        if check is not None and check.noise != self._Q_noise:
+            self._Q_noise = check.noise
+            jerk = self.params.jerk_psd * (check.noise / check.stated) ** 2
+            self._Q = constant_states_noise(white_jerk_noise(dt, jerk), self._walks)
         self.x, self.P = predict_constant_acceleration(self.x, self.P, dt, self._Q)
 
     def fuse_samples(self, samples) -> None:
@@ -309,8 +320,11 @@ class YangFusionKF(Estimator):
             x, P, _ = update_scalar(x, P, row, gps["gps_vz"] - sparse_dot(x, row), p.R_gps_vz)
         if acc is not None:
             self.accept(self.aid["acc"])
+            check = self.acc_check
+            check.sample(acc["acc_z"])
+            R_acc = p.R_acc if check.noise == check.stated else check.noise**2
             x, P, _ = update_scalar(x, P, ACC_BIAS_ROW, acc["acc_z"] - x[2] - x[ACC_BIAS],
-                                    p.R_acc)
+                                    R_acc)
         self.x, self.P = x, P
 
     def _speed_passes(self, vz: float, lag: float) -> bool:
@@ -325,6 +339,10 @@ class YangFusionKF(Estimator):
         return self.gate(self.aid["gps_vz"], vz - sparse_dot(self.x, row),
                          quadratic_form(self.P, row) + self.params.R_gps_vz,
                          self.params.gate_sigma) is Verdict.FUSED
+
+    def accelerometer_noise(self) -> float:
+        """σ_a = √R_acc: its scatter checked with ``fault_detection``."""
+        return math.sqrt(self.params.R_acc)
 
     def reset_height(self, source: str, innovation: float, variance: float) -> None:
         """A GPS speed reset moves the speed onto the sample. A height reset: height onto the
