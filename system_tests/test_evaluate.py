@@ -62,6 +62,7 @@ def test_the_table_has_every_cell_and_marks_the_estimator_lacking_an_input_na(ev
 
 def test_every_estimator_of_a_scenario_reads_the_same_sensor_outputs(evaluated):
     out, _ = evaluated
+    out = out / "models"                                        # the default's campaigns
     spec = read_ssp(out / "xu2016_hover15" / "system.ssp").spec
     feeds = {}
     for connection in spec.connections:
@@ -94,7 +95,7 @@ def test_the_html_page_holds_the_heat_map_and_a_plot_per_cell_and_the_na(evaluat
     markdown = (out / "evaluation.md").read_text()
     xu_row = next(line for line in markdown.splitlines() if line.startswith("| XuSHAEKF |"))
     assert xu_row.split("|")[2].strip() == "n/a"                # bao2017 column
-    summary = json.loads((out / "evaluation_summary.json").read_text())
+    summary = json.loads((out / "evaluation_summary.json").read_text())["models"]
     assert summary["bao2017"]["XuSHAEKF"]["not_applicable"].startswith("no acc")
     assert summary["xu2016_hover15"]["XuSHAEKF"]["rms"]["runs"] == 2
 
@@ -123,9 +124,10 @@ def test_an_unknown_estimator_or_scenario_is_refused_naming_the_known_ones(fmus,
 
 def test_fault_scenarios_put_the_fault_between_sensors_and_every_estimator(fmus):
     from altfusion.evaluation.run import plan_evaluation
+    from altfusion.evaluation.told import DEFAULT_TOLD
 
-    scenarios, estimators, _ = plan_evaluation(MODELS, None, ["baro_step", "range_terrain"])
-    by_name = {s.name: s for s in scenarios}
+    plans, estimators, _ = plan_evaluation(MODELS, None, ["baro_step", "range_terrain"])
+    by_name = {s.name: s for s in plans[DEFAULT_TOLD]}
     assert list(by_name) == ["baro_step", "range_terrain", "nominal_flight"]  # nominal added
     step = by_name["baro_step"]
     assert step.fault.faulty == ("baro",) and step.nominal == "nominal_flight"
@@ -147,7 +149,7 @@ def test_each_scenario_writes_and_summarizes_its_runs_health_events(evaluated):
     each scenario how many runs' events it summarized."""
     out, stdout = evaluated
     for scenario in SCENARIOS.split(","):
-        folder = out / scenario
+        folder = out / "models" / scenario
         expected = []
         for index in finished_runs(folder):
             events = health_events(load_run(folder, index).results)

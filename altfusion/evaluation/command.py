@@ -5,6 +5,7 @@ import argparse
 from pathlib import Path
 
 from altfusion.errors import UsageError
+from altfusion.evaluation.told import MISSTATED_FACTORS, MODELS, TOLD_MODES
 from altfusion.montecarlo.commands import guarded
 
 DEFAULT_RUNS = 20
@@ -28,9 +29,11 @@ defined and why these scenarios:
 """
 
 
-def command_line(args: argparse.Namespace, runs: int) -> str:
+def command_line(args: argparse.Namespace, runs: int, told: list[str]) -> str:
     """The command that reproduces this evaluation (its options other than the output's)."""
     words = ["altfusion evaluate", f"--runs {runs}"]
+    if told != [MODELS]:
+        words.append(f"--told {','.join(told)}")
     for option, default in (("seed", 0), ("backend", "core"), ("stop", None),
                             ("estimators", None), ("scenarios", None)):
         value = getattr(args, option)
@@ -48,15 +51,19 @@ def command_evaluate(args: argparse.Namespace) -> int:
     from altfusion.evaluation.report import (
         format_markdown,
         format_text,
+        primary,
         summary_json,
         write_html,
     )
     from altfusion.evaluation.run import (
         EvaluationSettings,
+        choose_told,
         evaluation_cells,
         plan_evaluation,
         run_evaluation,
-        stored_runs,
+        stored_settings,
+        told_modes,
+        variant_folder,
     )
     from altfusion.montecarlo.campaign_events import report_campaign_events
     from altfusion.montecarlo.commands import INTERRUPTED, _report_outcome
@@ -65,39 +72,45 @@ def command_evaluate(args: argparse.Namespace) -> int:
     if args.runs is not None and args.runs < 1:
         raise UsageError(f"--runs {args.runs}: expected at least 1 run per scenario")
     out = Path(args.out)
-    scenarios, estimators, fmu_paths = plan_evaluation(
-        args.models, _names(args.estimators), _names(args.scenarios))
-    runs = args.runs or (stored_runs(out) if args.resume else None) or DEFAULT_RUNS
+    stored = stored_settings(out) if args.resume else {}
+    told = choose_told(_names(args.told) if args.told is not None
+                       else stored.get("told") or [MODELS])
+    plans, estimators, fmu_paths = plan_evaluation(
+        args.models, _names(args.estimators), _names(args.scenarios), tuple(told))
+    runs = args.runs or stored.get("runs") or DEFAULT_RUNS
     settings = EvaluationSettings(runs, args.seed, args.backend, args.stop)
     with kept_workers(Execution(args.workers, args.scheduler, not args.quiet)) as execution:
-        outcomes = run_evaluation(out, scenarios, list(estimators), fmu_paths, settings,
+        outcomes = run_evaluation(out, plans, list(estimators), fmu_paths, settings,
                                   execution, args.resume)
     status, elapsed = 0, 0.0
     hint = f"altfusion evaluate --out {out} --resume (with the same options)"
-    for scenario, outcome in outcomes:
+    for variant, scenario, outcome in outcomes:
         if outcome is None:
-            print(f"{scenario.name}: no applicable estimator")
+            print(f"{variant.name}/{scenario.name}: no applicable estimator")
             continue
-        print(f"{scenario.name}: ", end="")
+        print(f"{variant.name}/{scenario.name}: ", end="")
         status = max(status, _report_outcome(outcome, hint))
         elapsed += outcome.elapsed
-    if len(outcomes) < len(scenarios):
+    if len(outcomes) < sum(len(scenarios) for scenarios in plans.values()):
         return status or INTERRUPTED
-    cells = evaluation_cells(out, scenarios, estimators)
+    results = evaluation_cells(out, plans, estimators)
     names = list(estimators)
     record = {"runs": runs, "master_seed": args.seed, "backend": args.backend,
-              "workers": next((o.backend for _, o in outcomes if o and o.backend),
+              "workers": next((o.backend for _, _, o in outcomes if o and o.backend),
                               "no workers")}
-    print()
-    print(format_text(cells))
-    events = [report_campaign_events(out / s.name, s.name) for s, o in outcomes if o]
-    print("\n" + "\n".join(text for text, _path in events))
-    markdown = format_markdown(cells, names, scenarios, record)
-    files = [*(path for _text, path in events), write_text(out / "evaluation.md", markdown),
-             write_html(out / "evaluation.html", cells, names, scenarios, record),
-             write_text(out / "evaluation_summary.json", summary_json(cells))]
+    for variant, cells in results.items():
+        print(f"\ntold {variant.label}:" if len(results) > 1 else "")
+        print(format_text(cells))
+    events = [(v, report_campaign_events(variant_folder(out, v) / s.name, s.name))
+              for v, s, o in outcomes if o]
+    print("\n" + "\n".join(f"{v.name}/{text}" for v, (text, _path) in events))
+    scenarios = plans[primary(results)]
+    markdown = format_markdown(results, names, scenarios, record)
+    files = [*(path for _v, (_text, path) in events), write_text(out / "evaluation.md", markdown),
+             write_html(out / "evaluation.html", results, names, scenarios, record),
+             write_text(out / "evaluation_summary.json", summary_json(results))]
     if args.docs:
-        header = DOCS_HEADER.format(command=command_line(args, runs),
+        header = DOCS_HEADER.format(command=command_line(args, runs, told_modes(plans)),
                                     elapsed=f"{elapsed / 60:.0f} min of campaigns on "
                                             f"{record['workers']}")
         files.append(write_text(Path(args.docs) / "evaluation.md", header + markdown))
@@ -116,6 +129,11 @@ def add_command(commands) -> None:
                         help="estimator FMU names (default: every estimator FMU in --models)")
     parser.add_argument("--scenarios", default=None, metavar="X,Y,...",
                         help="scenario names (default: every paper and fault scenario)")
+    parser.add_argument("--told", default=None, metavar="MODE,...",
+                        help=f"what the estimators are told, one evaluation each: "
+                             f"{', '.join(TOLD_MODES)} (x{MISSTATED_FACTORS[0]:g} and "
+                             f"x{MISSTATED_FACTORS[1]:g}) (default {MODELS}, or the stored "
+                             f"evaluation's with --resume)")
     parser.add_argument("--seed", type=int, default=0, help="master seed (default 0)")
     parser.add_argument("--stop", type=float, default=None,
                         help="cap every scenario's stop time, s (quick looks)")
