@@ -29,7 +29,7 @@ from altfusion.evaluation.metrics import (  # noqa: E402
     Summary,
     trailing_rms,
 )
-from altfusion.evaluation.robustness import robustness  # noqa: E402
+from altfusion.evaluation.robustness import robustness, robustness_measure  # noqa: E402
 from altfusion.evaluation.run import METRICS, Cell, Cells, estimator_cell  # noqa: E402
 from altfusion.evaluation.scenarios import PAPER_SCENARIOS, Scenario  # noqa: E402
 from altfusion.evaluation.told import DEFAULT_TOLD, MODELS, NOISE, Told  # noqa: E402
@@ -161,11 +161,10 @@ def robustness_markdown(results: dict[Told, Cells], estimators: list[str]) -> st
     rows = robustness(results, estimators)
     if not rows:
         return ""
-    against = ("its RMS over its RMS told the noise only (x1: the wrong statement costs "
-               "nothing)" if Told(NOISE) in results else "its RMS in m (`noise` not evaluated)")
     return (f"\n\nRobustness: each estimator told nothing or every noise misstated, in each "
-            f"scenario: {against}, and its coverage. The paper's estimator is evaluated as an "
-            f"observer told so (the system's own flies on the paper's parameters):\n\n"
+            f"scenario: {robustness_measure(results)}, and its coverage. The paper's "
+            f"estimator is evaluated as an observer told so (the system's own flies on the "
+            f"paper's parameters):\n\n"
             + _markdown_table(["estimator", "told", *results[rows[0][1]]],
                               [[estimator, told.label, *(r.text() for r in row.values())]
                                for estimator, told, row in rows]))
@@ -248,7 +247,7 @@ def best_coverage(cells: list[Cell]) -> float:
     return min(values, key=lambda v: abs(v - honest)) if values else math.nan
 
 
-def _heat_cell(cell: Cell, metric: str, best: float, linked: bool = True) -> str:
+def _heat_cell(cell: Cell, metric: str, best: float, linked: bool) -> str:
     summary = cell.summary(metric) if cell.runs else None
     if cell.not_applicable:
         return f'<td class="off" title="{esc(cell.not_applicable)}">{NA}</td>'
@@ -422,11 +421,9 @@ def robustness_html(results: dict[Told, Cells], estimators: list[str]) -> str:
             if math.isfinite(r.coverage) else f"<td>{esc(r.text())}</td>"
             for r in row.values()) + "</tr>"
         for estimator, told, row in rows)
-    against = ("RMS over the RMS told the noise only" if Told(NOISE) in results
-               else "RMS in m")
     return (f"<h2>Robustness</h2><p class=\"note\">Each estimator told nothing or every noise "
-            f"misstated: its {against}, and its coverage (coloured as above). The paper's "
-            f"estimator is evaluated as an observer told so.</p>"
+            f"misstated: {esc(robustness_measure(results))}, and its coverage (coloured as "
+            f"above). The paper's estimator is evaluated as an observer told so.</p>"
             f'<div class="wide"><table class="heat"><tr><th></th><th>told</th>{head}</tr>'
             f"{body}</table></div>")
 

@@ -38,6 +38,13 @@ def robustness_variants(results: dict[Told, Cells]) -> list[Told]:
     return [told for told in results if told.mode in (NOTHING, MISSTATED)]
 
 
+def robustness_measure(results: dict[Told, Cells]) -> str:
+    """What a robustness cell's first number is, in words."""
+    if Told(NOISE) in results:
+        return "its RMS over its RMS told the noise only (x1: the wrong statement costs nothing)"
+    return "its RMS in m (`noise` not evaluated)"
+
+
 def cell_robustness(cell: Cell, reference: Cell | None) -> Robustness:
     """A cell's robustness against its told-noise cell ``reference`` (None: not evaluated)."""
     if cell.not_applicable:
