@@ -29,7 +29,11 @@ from altfusion.evaluation.metrics import (  # noqa: E402
     Summary,
     trailing_rms,
 )
-from altfusion.evaluation.robustness import robustness, robustness_measure  # noqa: E402
+from altfusion.evaluation.robustness import (  # noqa: E402
+    Robustness,
+    robustness,
+    robustness_measure,
+)
 from altfusion.evaluation.run import METRICS, Cell, Cells, estimator_cell  # noqa: E402
 from altfusion.evaluation.scenarios import PAPER_SCENARIOS, Scenario  # noqa: E402
 from altfusion.evaluation.told import DEFAULT_TOLD, MODELS, NOISE, Told  # noqa: E402
@@ -394,38 +398,50 @@ def _scenario_section(scenario: Scenario, cells: list[Cell]) -> str:
             f"<p>{esc(scenario.description)}{note}</p>{''.join(plots)}")
 
 
+def scenario_groups(names: list[str]) -> list[tuple[str, list[str]]]:
+    """The paper scenarios and the fault suite among ``names``, each (title, names): shown
+    one above the other (a single table of 22 columns would not fit the page)."""
+    groups = [("paper scenarios", [n for n in names if n in PAPER_SCENARIOS]),
+              ("fault suite", [n for n in names if n not in PAPER_SCENARIOS])]
+    return [(title, group) for title, group in groups if group]
+
+
 def _heat_maps(variants: dict[str, Cells], estimators: list[str], metric: str,
                linked: str) -> str:
-    """The heat maps of the paper scenarios and of the fault suite, one above the other (a
-    single one of 22 columns would not fit the page)."""
-    cells = variants[linked]
-    groups = (("paper scenarios", [n for n in cells if n in PAPER_SCENARIOS]),
-              ("fault suite", [n for n in cells if n not in PAPER_SCENARIOS]))
+    """The heat maps of the paper scenarios and of the fault suite."""
     return "".join(f'<h3>{title}</h3><div class="wide">' + heat_table(
         {label: {n: column[n] for n in names} for label, column in variants.items()},
-        estimators, metric, linked) + "</div>" for title, names in groups if names)
+        estimators, metric, linked) + "</div>"
+        for title, names in scenario_groups(list(variants[linked])))
+
+
+def _robustness_cell(robust: Robustness) -> str:
+    if robust.not_applicable:
+        return f'<td class="off" title="{esc(robust.not_applicable)}">{NA}</td>'
+    if not math.isfinite(robust.coverage):
+        return f"<td>{esc(robust.text())}</td>"
+    return f'<td style="background:{coverage_colour(robust.coverage)}">{esc(robust.text())}</td>'
 
 
 def robustness_html(results: dict[Told, Cells], estimators: list[str]) -> str:
-    """The robustness table, each cell coloured by its coverage's honesty ('' if neither
-    nothing nor misstated was evaluated)."""
+    """The robustness tables of the paper scenarios and of the fault suite, each cell
+    coloured by its coverage's honesty ('' if neither nothing nor misstated was
+    evaluated)."""
     rows = robustness(results, estimators)
     if not rows:
         return ""
-    names = list(results[rows[0][1]])
-    head = "".join(f"<th>{esc(name)}</th>" for name in names)
-    body = "".join(
-        f"<tr><th>{esc(estimator)}</th><th>{esc(told.label)}</th>" + "".join(
-            f'<td class="off" title="{esc(r.not_applicable)}">{NA}</td>' if r.not_applicable
-            else f'<td style="background:{coverage_colour(r.coverage)}">{esc(r.text())}</td>'
-            if math.isfinite(r.coverage) else f"<td>{esc(r.text())}</td>"
-            for r in row.values()) + "</tr>"
-        for estimator, told, row in rows)
+    tables = []
+    for title, names in scenario_groups(list(rows[0][2])):
+        head = "".join(f"<th>{esc(name)}</th>" for name in names)
+        body = "".join(f"<tr><th>{esc(estimator)}</th><th>{esc(told.label)}</th>"
+                       + "".join(_robustness_cell(row[n]) for n in names) + "</tr>"
+                       for estimator, told, row in rows)
+        tables.append(f'<h3>{title}</h3><div class="wide"><table class="heat"><tr><th></th>'
+                      f"<th>told</th>{head}</tr>{body}</table></div>")
     return (f"<h2>Robustness</h2><p class=\"note\">Each estimator told nothing or every noise "
             f"misstated: {esc(robustness_measure(results))}, and its coverage (coloured as "
             f"above). The paper's estimator is evaluated as an observer told so.</p>"
-            f'<div class="wide"><table class="heat"><tr><th></th><th>told</th>{head}</tr>'
-            f"{body}</table></div>")
+            + "".join(tables))
 
 
 PAGE_STYLE = ("body{max-width:1240px}.heat td,.heat th{font-size:13px;padding:4px 5px;"

@@ -40,7 +40,7 @@ TOLD = {
     MODELS: "each estimator told its sensors' true noise and, in a paper scenario, the sensor "
             "error models the paper system states",
     NOTHING: "each estimator told nothing (its defaults)",
-    MISSTATED: "each estimator told what `noise` tells with every noise misstated",
+    MISSTATED: "each estimator told its sensors' noise only, every noise misstated",
 }
 """What each mode tells, as the report says it."""
 
