@@ -61,7 +61,7 @@ def main() -> int:
               f"scenario, {args.workers} workers, backend {args.backend}\n")
         print(f"{'scenario':26}{'mean run [s]':>14}")
         total = 0.0
-        for scenario in sorted(p for p in out.iterdir() if (p / "runs").is_dir()):
+        for scenario in sorted(p.parent for p in out.glob("*/*/runs")):
             times = [read_run(scenario, i).elapsed for i in finished_runs(scenario)]
             total += float(np.mean(times))
             print(f"{scenario.name:26}{np.mean(times):14.1f}")

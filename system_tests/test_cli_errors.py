@@ -96,6 +96,13 @@ def cases(plant: Path, tmp: Path) -> dict[str, tuple[list[str], str]]:
                                                  "file), such as"),
         "evaluate no runs": (["evaluate", "--runs", "0", "--models", str(plant.parent), "--out",
                               str(tmp / "ev")], "--runs 0: expected at least 1 run"),
+        "evaluate unknown told mode": (["evaluate", "--told", "models,datasheet", "--models",
+                                        str(plant.parent), "--out", str(tmp / "ev")],
+                                       "unknown told modes datasheet; known: noise, models, "
+                                       "nothing, misstated"),
+        "evaluate told mode twice": (["evaluate", "--told", "noise,noise", "--models",
+                                      str(plant.parent), "--out", str(tmp / "ev")],
+                                     "--told must name each told mode once"),
         "plant mass": (run + ["--set", "plant.mass=1e-300"],
                        "component 'plant': initialization failed: parameter 'mass' = 1e-300: "
                        "must be >= 0.001"),
@@ -149,7 +156,8 @@ CASE_NAMES = [
     "no SSP for mc", "unknown fault", "fault without its sensor", "unknown fault for mc",
     "stop beyond memory", "stop beyond any array", "mc stop beyond memory", "mc stop NaN",
     "mc no runs", "mc negative seed",
-    "a folder", "evaluate no runs", "plant mass", "no sensor data", "damaged sensor data",
+    "a folder", "evaluate no runs", "evaluate unknown told mode", "evaluate told mode twice",
+    "plant mass", "no sensor data", "damaged sensor data",
 ]
 
 

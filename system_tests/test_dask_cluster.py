@@ -75,4 +75,5 @@ def test_evaluate_on_the_cluster_gives_the_local_workers_table(cluster, tmp_path
     summaries = [json.loads((tmp_path / out / "evaluation_summary.json").read_text())
                  for out in ("local", "dask")]
     assert summaries[0] == summaries[1]
-    assert_same_runs(tmp_path / "dask" / "bao2017", tmp_path / "local" / "bao2017", 2)
+    assert_same_runs(tmp_path / "dask" / "models" / "bao2017",
+                     tmp_path / "local" / "models" / "bao2017", 2)

@@ -2,6 +2,7 @@
 2 runs, 2 estimators, 20 s flights), its table, HTML page and n/a marking, and resume."""
 
 import json
+import math
 import re
 import subprocess
 import sys
@@ -62,6 +63,7 @@ def test_the_table_has_every_cell_and_marks_the_estimator_lacking_an_input_na(ev
 
 def test_every_estimator_of_a_scenario_reads_the_same_sensor_outputs(evaluated):
     out, _ = evaluated
+    out = out / "models"                                        # the default's campaigns
     spec = read_ssp(out / "xu2016_hover15" / "system.ssp").spec
     feeds = {}
     for connection in spec.connections:
@@ -94,7 +96,7 @@ def test_the_html_page_holds_the_heat_map_and_a_plot_per_cell_and_the_na(evaluat
     markdown = (out / "evaluation.md").read_text()
     xu_row = next(line for line in markdown.splitlines() if line.startswith("| XuSHAEKF |"))
     assert xu_row.split("|")[2].strip() == "n/a"                # bao2017 column
-    summary = json.loads((out / "evaluation_summary.json").read_text())
+    summary = json.loads((out / "evaluation_summary.json").read_text())["models"]
     assert summary["bao2017"]["XuSHAEKF"]["not_applicable"].startswith("no acc")
     assert summary["xu2016_hover15"]["XuSHAEKF"]["rms"]["runs"] == 2
 
@@ -123,9 +125,10 @@ def test_an_unknown_estimator_or_scenario_is_refused_naming_the_known_ones(fmus,
 
 def test_fault_scenarios_put_the_fault_between_sensors_and_every_estimator(fmus):
     from altfusion.evaluation.run import plan_evaluation
+    from altfusion.evaluation.told import DEFAULT_TOLD
 
-    scenarios, estimators, _ = plan_evaluation(MODELS, None, ["baro_step", "range_terrain"])
-    by_name = {s.name: s for s in scenarios}
+    plans, estimators, _ = plan_evaluation(MODELS, None, ["baro_step", "range_terrain"])
+    by_name = {s.name: s for s in plans[DEFAULT_TOLD]}
     assert list(by_name) == ["baro_step", "range_terrain", "nominal_flight"]  # nominal added
     step = by_name["baro_step"]
     assert step.fault.faulty == ("baro",) and step.nominal == "nominal_flight"
@@ -147,7 +150,7 @@ def test_each_scenario_writes_and_summarizes_its_runs_health_events(evaluated):
     each scenario how many runs' events it summarized."""
     out, stdout = evaluated
     for scenario in SCENARIOS.split(","):
-        folder = out / scenario
+        folder = out / "models" / scenario
         expected = []
         for index in finished_runs(folder):
             events = health_events(load_run(folder, index).results)
@@ -156,3 +159,122 @@ def test_each_scenario_writes_and_summarizes_its_runs_health_events(evaluated):
         assert lines[0] == "run,time,estimator,source,what,test_ratio,count,exact"
         assert lines[1:] == expected and any(",initialized," in line for line in expected)
         assert f"{scenario}: health events of 2 runs" in stdout
+
+
+def test_each_told_mode_puts_what_it_tells_in_the_scenarios_specs(fmus):
+    """hajiyev (its own estimator HajiyevAdaptiveEstimator, non-adaptive) and the fault
+    flight, planned in every mode: the parameters each evaluated component gets."""
+    from altfusion.evaluation.run import choose_told, plan_evaluation
+
+    variants = choose_told(["noise", "models", "nothing", "misstated"])
+    plans, _, _ = plan_evaluation(MODELS, ["AltitudeEKF", "BaoDriftEstimator",
+                                           "HajiyevAdaptiveEstimator"],
+                                  ["hajiyev", "nominal_flight"], tuple(variants))
+    specs = {(told.name, s.name): s for told, scenarios in plans.items() for s in scenarios}
+
+    def told(mode: str, scenario: str, component: str) -> dict:
+        return dict(specs[mode, scenario].spec.component(component).parameters)
+
+    assert told("noise", "hajiyev", "AltitudeEKF") == {"baro_noise": 9.0, "gps_noise": 13.0,
+                                                       "gps_vz_noise": 0.2}
+    assert told("models", "hajiyev", "AltitudeEKF")["P0_offset"] == pytest.approx(0.01)
+    assert told("nothing", "hajiyev", "AltitudeEKF") == {}
+    for factor in (0.2, 5.0):
+        assert told(f"misstated_x{factor:g}", "hajiyev", "AltitudeEKF") == pytest.approx(
+            {"baro_noise": factor * 9.0, "gps_noise": factor * 13.0,
+             "gps_vz_noise": factor * 0.2})
+    # The paper's estimator: its own component with the paper's parameters in noise and
+    # models; in nothing and misstated an observer told so, the own still flying.
+    paper = told("noise", "hajiyev", "estimator")
+    for mode in ("noise", "models"):
+        assert specs[mode, "hajiyev"].components["HajiyevAdaptiveEstimator"] == "estimator"
+    for mode, expected in (("nothing", {}), ("misstated_x5", {"R_baro": 25.0 * 81.0,
+                                                             "R_gps": 25.0 * 169.0})):
+        scenario = specs[mode, "hajiyev"]
+        assert scenario.components["HajiyevAdaptiveEstimator"] == "HajiyevAdaptiveEstimator"
+        assert told(mode, "hajiyev", "HajiyevAdaptiveEstimator") == pytest.approx(expected)
+        assert told(mode, "hajiyev", "estimator") == paper
+        assert "estimator.h_est" not in scenario.spec.record
+    # The fault flight states no error models: models tells what noise tells.
+    for component in ("AltitudeEKF", "BaoDriftEstimator"):
+        assert told("models", "nominal_flight", component) == \
+            told("noise", "nominal_flight", component)
+        assert told("nothing", "nominal_flight", component) == {}
+    bao = told("noise", "nominal_flight", "BaoDriftEstimator")
+    assert told("misstated_x0.2", "nominal_flight", "BaoDriftEstimator") == pytest.approx(
+        {"R_baro": 0.04 * bao["R_baro"], "R_gps": 0.04 * bao["R_gps"],
+         "R_worst": 0.04 * bao["R_worst"], "user_range_error": 0.2 * bao["user_range_error"]})
+
+
+TOLD = "noise,models,nothing,misstated"
+
+
+@pytest.fixture(scope="module")
+def told_out(fmus, tmp_path_factory):
+    """xu2016_hover15 (flown on XuSHAEKF) evaluated in every told mode."""
+    out = tmp_path_factory.mktemp("told")
+    completed = subprocess.run(
+        [sys.executable, "-m", "altfusion.cli", "evaluate", "--runs", "2", "--estimators",
+         ESTIMATORS, "--scenarios", "xu2016_hover15", "--stop", "20", "--backend", "fmu",
+         "--workers", "2", "--models", str(MODELS), "--out", str(out), "--quiet",
+         "--told", TOLD],
+        capture_output=True, text=True, timeout=600, cwd=ROOT)
+    assert completed.returncode == 0, completed.stderr[-3000:]
+    return out
+
+
+def markdown_rows(markdown: str, heading: str) -> dict[str, list[str]]:
+    """The table after the line starting with ``heading``: first column -> the others (the
+    robustness table: 'estimator told' -> its cells)."""
+    lines = markdown.splitlines()
+    start = next(i for i, line in enumerate(lines) if line.startswith(heading)) + 4
+    rows = {}
+    for line in lines[start:]:
+        if not line.startswith("|"):
+            break
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        if heading.startswith("Robustness"):
+            rows[f"{cells[0]} {cells[1]}"] = cells[2:]
+        else:
+            rows[cells[0]] = cells[1:]
+    return rows
+
+
+def test_told_models_gives_the_default_evaluations_cells(evaluated, told_out):
+    default, _ = evaluated
+    cells = json.loads((default / "evaluation_summary.json").read_text())["models"]
+    told = json.loads((told_out / "evaluation_summary.json").read_text())
+    assert list(told) == ["noise", "models", "nothing", "misstated_x0.2", "misstated_x5"]
+    assert told["models"]["xu2016_hover15"] == cells["xu2016_hover15"]
+    assert json.loads((told_out / "evaluation.json").read_text())["told"] == TOLD.split(",")
+
+
+def test_the_report_shows_noise_and_models_side_by_side_and_the_robustness(told_out):
+    markdown = (told_out / "evaluation.md").read_text()
+    for heading in ("RMS error [m] of each estimator in each scenario, told noise / models",
+                    "Coverage, told noise / models"):
+        rows = markdown_rows(markdown, heading)
+        assert set(rows) == set(ESTIMATORS.split(","))
+        for (cell,) in rows.values():
+            values = [float(v.removesuffix(" %")) for v in cell.split(" / ")]
+            assert len(values) == 2 and all(math.isfinite(v) for v in values), cell
+    robust = markdown_rows(markdown, "Robustness:")
+    assert list(robust) == [f"{e} {t}" for e in ESTIMATORS.split(",")
+                            for t in ("nothing", "x0.2", "x5")]
+    for (cell,) in robust.values():
+        ratio, coverage = re.fullmatch(r"x([0-9.e+-]+), ([0-9]+) %", cell).groups()
+        assert math.isfinite(float(ratio)) and 0 <= int(coverage) <= 100
+    page = (told_out / "evaluation.html").read_text()
+    assert "<h2>Robustness</h2>" in page and "<th>noise</th><th>models</th>" in page
+
+
+def test_a_told_evaluation_resumes_with_its_modes_and_refuses_another(told_out):
+    resumed = evaluate(told_out, "--scenarios", "xu2016_hover15", "--resume")   # its modes
+    assert resumed.returncode == 0, resumed.stderr[-3000:]
+    assert resumed.stdout.count("0 executed in this session") == 5
+    refused = evaluate(told_out, "--scenarios", "xu2016_hover15", "--told", "noise",
+                       "--resume")
+    assert refused.returncode == 2
+    assert "cannot resume another evaluation" in refused.stderr
+    assert "told: ['noise', 'models', 'nothing', 'misstated'] then, ['noise'] now" \
+        in refused.stderr

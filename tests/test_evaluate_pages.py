@@ -32,6 +32,7 @@ from altfusion.evaluation.report import (
 )
 from altfusion.evaluation.run import Cell
 from altfusion.evaluation.scenarios import Scenario
+from altfusion.evaluation.told import DEFAULT_TOLD
 from altfusion.scores import pooled_rms
 from altfusion.systems.spec import SystemSpec
 
@@ -102,7 +103,7 @@ def page(tmp_path: Path) -> str:
                     Cell("C", "s1", "no acc")],
              "s2": [cell("A", "s2", [10.0, 10.0]), cell("B", "s2", [2.0, 2.0]),
                     cell("C", "s2", [4.0, 4.0])]}
-    path = write_html(tmp_path / "evaluation.html", cells, ["A", "B", "C"],
+    path = write_html(tmp_path / "evaluation.html", {DEFAULT_TOLD: cells}, ["A", "B", "C"],
                       [scenario("s1"), scenario("s2", Fault(100.0, ("baro",), 40.0))],
                       {"runs": 2, "master_seed": 0, "backend": "core"})
     return path.read_text()

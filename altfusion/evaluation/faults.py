@@ -3,10 +3,12 @@
 nominal RMS of each estimator) and with each fault of :data:`~altfusion.systems.faults.FAULTS`.
 
 The flight is closed on the true altitude, so every estimator is an observer: each is a
-component named after its FMU, connected by contract names to the five sensors, given the
-flight's true sensor noise (the flight's own choices for the estimators it knows, then
-:func:`~.scenarios.noise_parameters`). An estimator reading none of the sensors a
-fault needs (``FaultScenario.needs``) is n/a for that fault: the fault tells nothing about it.
+component named after its FMU, connected by contract names to the five sensors, told what
+the ``--told`` mode tells (:mod:`~altfusion.evaluation.told`) of the flight's true sensor
+noise (the flight's own choices for the estimators it knows, then
+:func:`~.scenarios.noise_parameters`); the flight states no error models. An estimator
+reading none of the sensors a fault needs (``FaultScenario.needs``) is n/a for that fault:
+the fault tells nothing about it.
 
 Rate: the flight's own (:func:`~altfusion.systems.faults.fault_flight`: plant, fast
 sensors, fault component and estimators at 20 Hz, GNSS 10 Hz, radio altimeter 5 Hz); every
@@ -36,6 +38,7 @@ from altfusion.evaluation.scenarios import (
     sensor_noise,
     sensor_sources,
 )
+from altfusion.evaluation.told import DEFAULT_TOLD, Told
 from altfusion.systems.faults import (
     FAULTS,
     TRUE_NOISE,
@@ -59,7 +62,7 @@ def fault_names() -> list[str]:
 
 
 def _flight(estimators: dict[str, EstimatorInfo], fmu_paths: dict[str, Path],
-            selected: list[str], needs: tuple[str, ...] = ()) -> Scenario:
+            selected: list[str], told: Told, needs: tuple[str, ...] = ()) -> Scenario:
     spec = fault_flight(estimators=())
     sources = sensor_sources(spec)
     noise = sensor_noise(spec, fmu_paths)
@@ -73,7 +76,7 @@ def _flight(estimators: dict[str, EstimatorInfo], fmu_paths: dict[str, Path],
         parameters = {**TRUE_NOISE.get(estimator.name, {}),
                       **noise_parameters(estimator, noise)}
         added.append(ComponentSpec(estimator.name, estimator.name, spec.base_step,
-                                   parameters))
+                                   told.tell(parameters, {})))
         connections.extend(sensor_inputs(estimator, estimator.name, sources))
     record, metrics = record_estimators(components, TRUTH)
     spec = replace(spec, name="evaluate_fault_flight",
@@ -85,16 +88,18 @@ def _flight(estimators: dict[str, EstimatorInfo], fmu_paths: dict[str, Path],
 
 
 def nominal_scenario(estimators: dict[str, EstimatorInfo], fmu_paths: dict[str, Path],
-                     selected: list[str]) -> Scenario:
-    """The fault flight without a fault."""
-    return _flight(estimators, fmu_paths, selected)
+                     selected: list[str], told: Told = DEFAULT_TOLD) -> Scenario:
+    """The fault flight without a fault, its estimators told what ``told`` tells."""
+    return _flight(estimators, fmu_paths, selected, told)
 
 
 def fault_scenario(name: str, estimators: dict[str, EstimatorInfo],
-                   fmu_paths: dict[str, Path], selected: list[str]) -> Scenario:
-    """The fault flight with fault ``name``; its nominal RMS comes from :data:`NOMINAL`."""
+                   fmu_paths: dict[str, Path], selected: list[str],
+                   told: Told = DEFAULT_TOLD) -> Scenario:
+    """The fault flight with fault ``name``, its estimators told what ``told`` tells; its
+    nominal RMS comes from :data:`NOMINAL` (of the same mode)."""
     fault = FAULTS[name]
-    flight = _flight(estimators, fmu_paths, selected, fault.needs)
+    flight = _flight(estimators, fmu_paths, selected, told, fault.needs)
     spec = replace(with_fault(flight.spec, name), name=f"evaluate_{name}",
                    record=flight.spec.record)
     stop = None

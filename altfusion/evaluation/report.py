@@ -2,7 +2,13 @@
 matrices and the table in markdown), ``evaluation.html`` (self-contained: heat maps estimator
 x scenario of the RMS, coloured by its ratio to the column's best, and of the coverage, each
 cell linked to its plot; the table; one plot per cell as an embedded PNG) and
-``evaluation_summary.json``."""
+``evaluation_summary.json``.
+
+Of several ``--told`` variants (:mod:`altfusion.evaluation.told`): the matrices and heat maps
+show told ``noise`` and told ``models`` side by side (those evaluated), a robustness table
+(:mod:`altfusion.evaluation.robustness`) shows told ``nothing`` and ``misstated``; the full
+table and the plots are of the primary variant (:func:`primary`: ``models`` when evaluated),
+the summary has every variant."""
 
 import base64
 import io
@@ -23,8 +29,14 @@ from altfusion.evaluation.metrics import (  # noqa: E402
     Summary,
     trailing_rms,
 )
-from altfusion.evaluation.run import METRICS, Cell  # noqa: E402
+from altfusion.evaluation.robustness import (  # noqa: E402
+    Robustness,
+    robustness,
+    robustness_measure,
+)
+from altfusion.evaluation.run import METRICS, Cell, Cells, estimator_cell  # noqa: E402
 from altfusion.evaluation.scenarios import PAPER_SCENARIOS, Scenario  # noqa: E402
+from altfusion.evaluation.told import DEFAULT_TOLD, MODELS, NOISE, Told  # noqa: E402
 from altfusion.montecarlo.report import STYLE, esc  # noqa: E402
 from altfusion.scores import COVERAGE_SIGMAS, HONEST_COVERAGE, RMS_DEFINITION  # noqa: E402
 
@@ -94,47 +106,103 @@ def _markdown_table(header: list[str], body: list[list[str]]) -> str:
     return "\n".join(lines)
 
 
-def matrix_markdown(cells: dict[str, list[Cell]], estimators: list[str], metric: str) -> str:
-    """Estimators (rows) x scenarios (columns) of ``metric``: the mean RMS in m with its
-    ratio to the column's best, or the mean coverage in %; n/a where not applicable."""
+def matrix_value(cell: Cell, metric: str, best: float | None = None) -> str:
+    """A matrix's text of a cell: the mean RMS in m (with its ratio to the column's
+    ``best``, if given) or the mean coverage in %; n/a where not applicable, - without a
+    finite value."""
+    summary = cell.summary(metric) if cell.runs else None
+    if cell.not_applicable:
+        return NA
+    if summary is None or not summary.finite:
+        return "-"
+    if metric != "rms":
+        return f"{100 * summary.mean:.0f} %"
+    if best is not None and best > 0:
+        return f"{summary.mean:.3g} (x{summary.mean / best:.3g})"
+    return f"{summary.mean:.3g}"
+
+
+def matrix_markdown(variants: list[Cells], estimators: list[str], metric: str) -> str:
+    """Estimators (rows) x scenarios (columns) of ``metric`` in one or more ``variants`` of
+    the evaluation: of one, the mean RMS in m with its ratio to the column's best, or the
+    mean coverage in %; of several, their values side by side ('a / b')."""
     body = []
     for estimator in estimators:
         row = [estimator]
-        for column in cells.values():
-            cell = next(c for c in column if c.estimator == estimator)
-            summary = cell.summary(metric) if cell.runs else None
-            if cell.not_applicable:
-                row.append(NA)
-            elif summary is None or not summary.finite:
-                row.append("-")
-            elif metric == "rms":
-                best = best_rms(column)
-                row.append(f"{summary.mean:.3g} (x{summary.mean / best:.3g})" if best > 0
-                           else f"{summary.mean:.3g}")
+        for name, column in variants[0].items():
+            if len(variants) == 1:
+                row.append(matrix_value(estimator_cell(column, estimator), metric,
+                                        best_rms(column) if metric == "rms" else None))
             else:
-                row.append(f"{100 * summary.mean:.0f} %")
+                row.append(" / ".join(matrix_value(estimator_cell(cells[name], estimator),
+                                                   metric) for cells in variants))
         body.append(row)
-    return _markdown_table(["estimator", *cells], body)
+    return _markdown_table(["estimator", *variants[0]], body)
 
 
-def format_markdown(cells: dict[str, list[Cell]], estimators: list[str],
+def side_by_side(results: dict[Told, Cells]) -> list[Told]:
+    """The variants the RMS and coverage matrices show side by side: told the noise and told
+    the models, those evaluated (of neither, the first variant)."""
+    return [told for told in results if told.mode in (NOISE, MODELS)] or list(results)[:1]
+
+
+def primary(results: dict[Told, Cells]) -> Told:
+    """The variant of the full table and the per-cell plots: ``models`` when evaluated."""
+    return side_by_side(results)[-1]
+
+
+def told_markdown(results: dict[Told, Cells]) -> str:
+    """The variants evaluated and what each told (nothing for the default alone)."""
+    if list(results) == [DEFAULT_TOLD]:
+        return ""
+    return "What the estimators were told:\n\n" + "\n".join(
+        f"* {told.label}: {told.description}" for told in results) + "\n\n"
+
+
+def robustness_markdown(results: dict[Told, Cells], estimators: list[str]) -> str:
+    """The robustness table (estimator and variant x scenarios), if nothing or misstated was
+    evaluated."""
+    rows = robustness(results, estimators)
+    if not rows:
+        return ""
+    return (f"\n\nRobustness: each estimator told nothing or every noise misstated, in each "
+            f"scenario: {robustness_measure(results)}, and its coverage. The paper's "
+            f"estimator is evaluated as an observer told so (the system's own flies on the "
+            f"paper's parameters):\n\n"
+            + _markdown_table(["estimator", "told", *results[rows[0][1]]],
+                              [[estimator, told.label, *(r.text() for r in row.values())]
+                               for estimator, told, row in rows]))
+
+
+def format_markdown(results: dict[Told, Cells], estimators: list[str],
                     scenarios: list[Scenario], settings: dict) -> str:
-    """``evaluation.md``: the RMS and coverage matrices, the scenarios, the full table."""
+    """``evaluation.md``: the RMS and coverage matrices (told the noise and the models side
+    by side, as evaluated), the robustness table, the scenarios, the full table of the
+    primary variant."""
+    shown = side_by_side(results)
+    main = primary(results)
+    cells = results[main]
+    told = "" if len(results) == 1 else f", told {' / '.join(t.label for t in shown)}"
+    ratio = "; in brackets: over the column's best" if len(shown) == 1 else ""
     described = "\n".join(f"* `{s.name}`: {s.description}" + (f" {s.note}" if s.note else "")
                           for s in scenarios)
     not_applicable = sorted({(c.estimator, c.not_applicable) for column in cells.values()
                              for c in column if c.not_applicable})
     reasons = "\n".join(f"* {e}: {r}" for e, r in dict.fromkeys(not_applicable))
+    variants = [results[t] for t in shown]
     return (
-        f"RMS error [m] of each estimator in each scenario (mean over {settings['runs']} "
-        f"runs; in brackets: over the column's best):\n\n"
-        + matrix_markdown(cells, estimators, "rms")
-        + f"\n\nCoverage (|e| <= {COVERAGE_SIGMAS:g} h_std outside the fault transient; an "
-          f"honest h_std gives about 95 %, the fault suite asks for 85 % to 99.5 %):\n\n"
-        + matrix_markdown(cells, estimators, "coverage")
+        told_markdown(results)
+        + f"RMS error [m] of each estimator in each scenario{told} (mean over "
+          f"{settings['runs']} runs{ratio}):\n\n"
+        + matrix_markdown(variants, estimators, "rms")
+        + f"\n\nCoverage{told} (|e| <= {COVERAGE_SIGMAS:g} h_std outside the fault transient; "
+          f"an honest h_std gives about 95 %, the fault suite asks for 85 % to 99.5 %):\n\n"
+        + matrix_markdown(variants, estimators, "coverage")
+        + robustness_markdown(results, estimators)
         + "\n\nScenarios:\n\n" + described
         + ("\n\nNot applicable (never run on defaults):\n\n" + reasons if reasons else "")
-        + "\n\nEvery metric (mean ± standard deviation over runs):\n\n"
+        + f"\n\nEvery metric{'' if len(results) == 1 else f', told {main.label}'} (mean ± "
+          f"standard deviation over runs):\n\n"
         + _markdown_table(list(COLUMNS), [list(r) for r in rows(cells)])
         + f"\n\n{LEGEND}.\n")
 
@@ -183,7 +251,7 @@ def best_coverage(cells: list[Cell]) -> float:
     return min(values, key=lambda v: abs(v - honest)) if values else math.nan
 
 
-def _heat_cell(cell: Cell, metric: str, best: float) -> str:
+def _heat_cell(cell: Cell, metric: str, best: float, linked: bool) -> str:
     summary = cell.summary(metric) if cell.runs else None
     if cell.not_applicable:
         return f'<td class="off" title="{esc(cell.not_applicable)}">{NA}</td>'
@@ -196,27 +264,38 @@ def _heat_cell(cell: Cell, metric: str, best: float) -> str:
     else:
         text, colour, tip = f"{100 * value:.0f} %", coverage_colour(value), ""
     marked = value == best
-    link = f'<a href="#{esc(cell_id(cell.scenario, cell.estimator))}">{text}' \
-           f'{" ★" if marked else ""}</a>'
+    text += " ★" if marked else ""
+    link = f'<a href="#{esc(cell_id(cell.scenario, cell.estimator))}">{text}</a>' if linked \
+        else text
     title = f"{cell.estimator} in {cell.scenario}: {summary.format(**FORMATS[metric])}" + \
         (f", {tip}" if tip else "")
     return (f'<td class="{"best" if marked else ""}" style="background:{colour}" '
             f'title="{esc(title)}">{link}</td>')
 
 
-def heat_table(cells: dict[str, list[Cell]], estimators: list[str], metric: str) -> str:
+def heat_table(variants: dict[str, Cells], estimators: list[str], metric: str,
+               linked: str) -> str:
     """A heat map as an HTML table, estimators (rows) x scenarios (columns): the mean RMS
     (coloured by its ratio to the column's best) or coverage (coloured by honesty), the
-    column's best marked ★, each cell a link to its plot and each column to its section."""
-    head = "".join(f'<th><a href="#{esc(name)}">{esc(name)}</a></th>' for name in cells)
-    best = {name: best_rms(column) if metric == "rms" else best_coverage(column)
-            for name, column in cells.items()}
+    column's best marked ★, each column a link to its section. Of several ``variants``
+    (label -> cells), adjacent columns per scenario, one per variant. The cells of the
+    variant ``linked`` link to their plots."""
+    names = list(variants[linked])
+    several = len(variants) > 1
+    span = f' colspan="{len(variants)}"' if several else ""
+    head = "".join(f'<th{span}><a href="#{esc(name)}">{esc(name)}</a></th>' for name in names)
+    labels = "<tr>" + "".join(f"<th>{esc(label)}</th>" for _ in names
+                              for label in variants) + "</tr>" if several else ""
+    best = {(label, name): best_rms(column) if metric == "rms" else best_coverage(column)
+            for label, cells in variants.items() for name, column in cells.items()}
     body = []
     for estimator in estimators:
-        row = "".join(_heat_cell(next(c for c in column if c.estimator == estimator), metric,
-                                 best[name]) for name, column in cells.items())
+        row = "".join(_heat_cell(estimator_cell(cells[name], estimator), metric,
+                                 best[label, name], label == linked)
+                      for name in names for label, cells in variants.items())
         body.append(f"<tr><th>{esc(estimator)}</th>{row}</tr>")
-    return f'<table class="heat"><tr><th></th>{head}</tr>{"".join(body)}</table>'
+    corner = '<th rowspan="2"></th>' if several else "<th></th>"
+    return f'<table class="heat"><tr>{corner}{head}</tr>{labels}{"".join(body)}</table>'
 
 
 def ratio_legend() -> str:
@@ -319,14 +398,50 @@ def _scenario_section(scenario: Scenario, cells: list[Cell]) -> str:
             f"<p>{esc(scenario.description)}{note}</p>{''.join(plots)}")
 
 
-def _heat_maps(cells: dict[str, list[Cell]], estimators: list[str], metric: str) -> str:
-    """The heat maps of the paper scenarios and of the fault suite, one above the other (a
-    single one of 22 columns would not fit the page)."""
-    groups = (("paper scenarios", [n for n in cells if n in PAPER_SCENARIOS]),
-              ("fault suite", [n for n in cells if n not in PAPER_SCENARIOS]))
-    return "".join(f'<h3>{title}</h3><div class="wide">'
-                   f"{heat_table({n: cells[n] for n in names}, estimators, metric)}</div>"
-                   for title, names in groups if names)
+def scenario_groups(names: list[str]) -> list[tuple[str, list[str]]]:
+    """The paper scenarios and the fault suite among ``names``, each (title, names): shown
+    one above the other (a single table of 22 columns would not fit the page)."""
+    groups = [("paper scenarios", [n for n in names if n in PAPER_SCENARIOS]),
+              ("fault suite", [n for n in names if n not in PAPER_SCENARIOS])]
+    return [(title, group) for title, group in groups if group]
+
+
+def _heat_maps(variants: dict[str, Cells], estimators: list[str], metric: str,
+               linked: str) -> str:
+    """The heat maps of the paper scenarios and of the fault suite."""
+    return "".join(f'<h3>{title}</h3><div class="wide">' + heat_table(
+        {label: {n: column[n] for n in names} for label, column in variants.items()},
+        estimators, metric, linked) + "</div>"
+        for title, names in scenario_groups(list(variants[linked])))
+
+
+def _robustness_cell(robust: Robustness) -> str:
+    if robust.not_applicable:
+        return f'<td class="off" title="{esc(robust.not_applicable)}">{NA}</td>'
+    if not math.isfinite(robust.coverage):
+        return f"<td>{esc(robust.text())}</td>"
+    return f'<td style="background:{coverage_colour(robust.coverage)}">{esc(robust.text())}</td>'
+
+
+def robustness_html(results: dict[Told, Cells], estimators: list[str]) -> str:
+    """The robustness tables of the paper scenarios and of the fault suite, each cell
+    coloured by its coverage's honesty ('' if neither nothing nor misstated was
+    evaluated)."""
+    rows = robustness(results, estimators)
+    if not rows:
+        return ""
+    tables = []
+    for title, names in scenario_groups(list(rows[0][2])):
+        head = "".join(f"<th>{esc(name)}</th>" for name in names)
+        body = "".join(f"<tr><th>{esc(estimator)}</th><th>{esc(told.label)}</th>"
+                       + "".join(_robustness_cell(row[n]) for n in names) + "</tr>"
+                       for estimator, told, row in rows)
+        tables.append(f'<h3>{title}</h3><div class="wide"><table class="heat"><tr><th></th>'
+                      f"<th>told</th>{head}</tr>{body}</table></div>")
+    return (f"<h2>Robustness</h2><p class=\"note\">Each estimator told nothing or every noise "
+            f"misstated: {esc(robustness_measure(results))}, and its coverage (coloured as "
+            f"above). The paper's estimator is evaluated as an observer told so.</p>"
+            + "".join(tables))
 
 
 PAGE_STYLE = ("body{max-width:1240px}.heat td,.heat th{font-size:13px;padding:4px 5px;"
@@ -343,10 +458,16 @@ PAGE_STYLE = ("body{max-width:1240px}.heat td,.heat th{font-size:13px;padding:4p
               "font-size:85%;vertical-align:top;margin:1em}")
 
 
-def write_html(path: Path, cells: dict[str, list[Cell]], estimators: list[str],
+def write_html(path: Path, results: dict[Told, Cells], estimators: list[str],
                scenarios: list[Scenario], settings: dict) -> Path:
-    """``evaluation.html``: the RMS and coverage heat maps, the table, then per scenario a
-    plot per cell."""
+    """``evaluation.html``: the RMS and coverage heat maps (told the noise and the models
+    side by side, as evaluated), the robustness table, the table, then per scenario a plot
+    per cell (of the primary variant)."""
+    main = primary(results)
+    cells = results[main]
+    variants = {told.label: results[told] for told in side_by_side(results)}
+    told = "" if len(results) == 1 else "".join(
+        f"<li>{esc(t.label)}: {esc(t.description)}</li>" for t in results)
     header = "".join(f"<th>{esc(h)}</th>" for h in COLUMNS)
     body = "".join("<tr>" + "".join(f"<td>{esc(c)}</td>" for c in row[:3])
                    + (f'<td colspan="{len(row) - 3}">{esc(row[3])}</td>' if row[2] == NA
@@ -360,27 +481,34 @@ def write_html(path: Path, cells: dict[str, list[Cell]], estimators: list[str],
         f"{settings['master_seed']}, backend {esc(settings['backend'])}); every estimator of "
         f"a scenario reads the same sensor outputs in each run. A cell links to its plot, a "
         f"scenario to its section.</p>"
-        f"<h2>RMS error [m]</h2><p class=\"note\">{esc(RMS_DEFINITION)}.</p>"
-        f"{ratio_legend()}{_heat_maps(cells, estimators, 'rms')}"
+        + (f"<p>What the estimators were told (plots and the table: {esc(main.label)}):</p>"
+           f"<ul>{told}</ul>" if told else "")
+        + f"<h2>RMS error [m]</h2><p class=\"note\">{esc(RMS_DEFINITION)}.</p>"
+        f"{ratio_legend()}{_heat_maps(variants, estimators, 'rms', main.label)}"
         f"<h2>Coverage</h2><p class=\"note\">|e| <= {COVERAGE_SIGMAS:g} h_std outside the "
         f"fault transient: an honest h_std gives about 95 %.</p>{coverage_legend()}"
-        f"{_heat_maps(cells, estimators, 'coverage')}"
+        f"{_heat_maps(variants, estimators, 'coverage', main.label)}"
+        f"{robustness_html(results, estimators)}"
         f"<h2>Every metric</h2><table><tr>{header}</tr>{body}</table>"
         f"<p class=\"note\">{esc(LEGEND)}</p>"
         f"<h2>Error versus time, per cell</h2>{sections}\n</body></html>\n")
     return write_text(path, page)
 
 
-def summary_json(cells: dict[str, list[Cell]]) -> str:
-    """Every cell's summaries (mean, std, finite runs, runs) or its n/a reason, as JSON."""
-    data: dict = {}
-    for scenario, column in cells.items():
-        for cell in column:
-            entry: dict = {"not_applicable": cell.not_applicable} if cell.not_applicable else {
-                metric: (None if (s := cell.summary(metric)) is None else
-                         {"mean": _finite(s.mean), "std": _finite(s.std), "finite": s.finite,
-                          "runs": s.runs}) for metric in METRICS}
-            data.setdefault(scenario, {})[cell.estimator] = entry
+def _summary_entry(cell: Cell) -> dict:
+    if cell.not_applicable:
+        return {"not_applicable": cell.not_applicable}
+    return {metric: (None if (s := cell.summary(metric)) is None else
+                     {"mean": _finite(s.mean), "std": _finite(s.std), "finite": s.finite,
+                      "runs": s.runs}) for metric in METRICS}
+
+
+def summary_json(results: dict[Told, Cells]) -> str:
+    """Every cell's summaries (mean, std, finite runs, runs) or its n/a reason, by variant
+    (:attr:`Told.name`), scenario and estimator, as JSON."""
+    data = {told.name: {scenario: {cell.estimator: _summary_entry(cell) for cell in column}
+                        for scenario, column in cells.items()}
+            for told, cells in results.items()}
     return json.dumps(data, indent=2) + "\n"
 
 

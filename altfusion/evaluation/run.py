@@ -1,12 +1,13 @@
-"""Running ``altfusion evaluate``: one Monte Carlo campaign per scenario, every applicable
-estimator side by side in each run, then the metrics of every (estimator, scenario) cell.
+"""Running ``altfusion evaluate``: one Monte Carlo campaign per scenario and ``--told``
+variant (:mod:`altfusion.evaluation.told`), every applicable estimator side by side in each
+run, then the metrics of every (estimator, scenario) cell of every variant.
 
-Each scenario's system is written once to ``OUT/<scenario>/system.ssp`` with its description
-``scenario.json``; its campaign lives in ``OUT/<scenario>/``
+Each scenario's system is written once to ``OUT/<variant>/<scenario>/system.ssp`` with its
+description ``scenario.json``; its campaign lives in ``OUT/<variant>/<scenario>/``
 (:mod:`altfusion.montecarlo.execution`: seeds, workers, storage, atomic writes, resume).
 Run i of every scenario uses master seed M and run index i, so every estimator of a scenario
-reads the same sensor outputs. ``OUT/evaluation.json`` records the settings; ``--resume``
-checks them and completes the missing runs.
+reads the same sensor outputs, in every variant. ``OUT/evaluation.json`` records the settings
+and the told modes; ``--resume`` checks them and completes the missing runs of every variant.
 """
 
 import dataclasses
@@ -38,6 +39,7 @@ from altfusion.evaluation.scenarios import (
     discover_estimators,
     paper_scenario,
 )
+from altfusion.evaluation.told import DEFAULT_TOLD, TOLD_MODES, Told, told_variants
 from altfusion.montecarlo.execution import (
     CampaignOutcome,
     CampaignSettings,
@@ -73,42 +75,52 @@ def available_scenarios() -> dict[str, str]:
     return {**dict.fromkeys(PAPER_SCENARIOS, "paper"), **dict.fromkeys(fault_names(), "fault")}
 
 
-def _choose(kind: str, given: list[str] | None, known: list[str]) -> list[str]:
+def _choose(option: str, noun: str, given: list[str] | None, known: list[str]) -> list[str]:
+    """The names ``given`` to ``--option`` (None: every ``known`` one); an unknown or
+    repeated name, or none, is the user's mistake."""
     if given is None:
         return list(known)
     unknown = [name for name in given if name not in known]
     if unknown:
-        raise EvaluationError(f"unknown {kind} {', '.join(unknown)}; known: {', '.join(known)}")
+        raise EvaluationError(f"unknown {noun}s {', '.join(unknown)}; known: "
+                              f"{', '.join(known)}")
     if len(set(given)) != len(given) or not given:
-        raise EvaluationError(f"--{kind} must name each {kind[:-1]} once")
+        raise EvaluationError(f"--{option} must name each {noun} once")
     return list(given)
 
 
+def choose_told(modes: list[str]) -> list[Told]:
+    """The variants of the ``--told`` modes (each known, once)."""
+    return told_variants(_choose("told", "told mode", modes, list(TOLD_MODES)))
+
+
+Plans = dict[Told, list[Scenario]]
+"""Each ``--told`` variant's scenarios."""
+
+
 def plan_evaluation(models: Path, estimators: list[str] | None = None,
-                    scenarios: list[str] | None = None,
-                    ) -> tuple[list[Scenario], dict[str, EstimatorInfo], dict[str, Path]]:
-    """The scenarios to run (a fault scenario brings its nominal flight along), the
-    estimators and the FMU files of ``models``."""
+                    scenarios: list[str] | None = None, told: tuple[Told, ...] = (DEFAULT_TOLD,),
+                    ) -> tuple[Plans, dict[str, EstimatorInfo], dict[str, Path]]:
+    """The scenarios to run in each variant of ``told`` (a fault scenario brings its nominal
+    flight along), the estimators and the FMU files of ``models``."""
     fmu_paths = {path.stem: path.resolve() for path in sorted(Path(models).glob("*.fmu"))}
     found = discover_estimators(fmu_paths)
     if not found:
         raise EvaluationError(f"no estimator FMU in {models} (build them: python build_fmu.py)")
-    chosen = _choose("estimators", estimators, list(found))
+    chosen = _choose("estimators", "estimator", estimators, list(found))
     kinds = available_scenarios()
-    names = _choose("scenarios", scenarios, list(kinds))
-    planned: list[Scenario] = []
+    names = _choose("scenarios", "scenario", scenarios, list(kinds))
     from altfusion.evaluation.faults import NOMINAL, fault_scenario, nominal_scenario
 
     if any(kinds[n] == "fault" and n != NOMINAL for n in names) and NOMINAL not in names:
         names.append(NOMINAL)
-    for name in names:
-        if kinds[name] == "paper":
-            planned.append(paper_scenario(name, found, fmu_paths, chosen))
-        elif name == NOMINAL:
-            planned.append(nominal_scenario(found, fmu_paths, chosen))
-        else:
-            planned.append(fault_scenario(name, found, fmu_paths, chosen))
-    return planned, {n: found[n] for n in chosen}, fmu_paths
+    plans: Plans = {}
+    for variant in told:
+        plans[variant] = [
+            paper_scenario(name, found, fmu_paths, chosen, variant) if kinds[name] == "paper"
+            else nominal_scenario(found, fmu_paths, chosen, variant) if name == NOMINAL
+            else fault_scenario(name, found, fmu_paths, chosen, variant) for name in names]
+    return plans, {n: found[n] for n in chosen}, fmu_paths
 
 
 def scenario_json(scenario: Scenario) -> dict[str, Any]:
@@ -146,19 +158,27 @@ def _write_ssp(scenario: Scenario, fmu_paths: dict[str, Path], path: Path) -> No
         temporary.unlink(missing_ok=True)
 
 
-def _settings_json(settings: EvaluationSettings, scenarios: list[Scenario],
+def told_modes(plans: Plans) -> list[str]:
+    """The ``--told`` modes of the planned variants."""
+    return list(dict.fromkeys(told.mode for told in plans))
+
+
+def _settings_json(settings: EvaluationSettings, plans: Plans,
                    estimators: list[str]) -> dict[str, Any]:
-    return {"format": 1, "runs": settings.runs, "master_seed": settings.master_seed,
+    scenarios = next(iter(plans.values()))
+    return {"format": 2, "runs": settings.runs, "master_seed": settings.master_seed,
             "backend": settings.backend, "stop_time": settings.stop_time,
-            "scenarios": [s.name for s in scenarios], "estimators": estimators}
+            "scenarios": [s.name for s in scenarios], "estimators": estimators,
+            "told": told_modes(plans)}
 
 
-def check_evaluation(out: Path, settings: EvaluationSettings, scenarios: list[Scenario],
+def check_evaluation(out: Path, settings: EvaluationSettings, plans: Plans,
                      estimators: list[str], resume: bool) -> None:
     """Write ``OUT/evaluation.json``; refuse to overwrite an evaluation unless resuming the
-    same one (same scenarios, estimators, seed, backend, stop time; runs may grow)."""
+    same one (same scenarios, estimators, told modes, seed, backend, stop time; runs may
+    grow)."""
     path = Path(out) / EVALUATION
-    new = _settings_json(settings, scenarios, estimators)
+    new = _settings_json(settings, plans, estimators)
     if path.is_file():
         if not resume:
             raise EvaluationError(f"{out} already holds an evaluation: --resume completes it, "
@@ -174,38 +194,47 @@ def check_evaluation(out: Path, settings: EvaluationSettings, scenarios: list[Sc
     write_text(path, json.dumps(new, indent=2) + "\n")
 
 
-def stored_runs(out: Path) -> int | None:
-    """The number of runs of the evaluation in ``out`` (None if there is none)."""
+def stored_settings(out: Path) -> dict[str, Any]:
+    """The settings of the evaluation in ``out`` (empty if there is none)."""
     path = Path(out) / EVALUATION
-    return json.loads(path.read_text())["runs"] if path.is_file() else None
+    return json.loads(path.read_text()) if path.is_file() else {}
 
 
-def run_evaluation(out: Path, scenarios: list[Scenario], estimators: list[str],
+def variant_folder(out: Path, told: Told) -> Path:
+    """The folder of a variant's campaigns, one per scenario."""
+    return Path(out) / told.name
+
+
+Outcome = tuple[Told, Scenario, CampaignOutcome | None]
+"""A campaign's variant, scenario and outcome (None: no estimator applies, nothing run)."""
+
+
+def run_evaluation(out: Path, plans: Plans, estimators: list[str],
                    fmu_paths: dict[str, Path], settings: EvaluationSettings,
-                   execution: Execution, resume: bool = False,
-                   ) -> list[tuple[Scenario, CampaignOutcome | None]]:
-    """Every scenario's campaign in turn (None: no estimator applies, nothing to run); stops
-    at the first interrupted one."""
+                   execution: Execution, resume: bool = False) -> list[Outcome]:
+    """Every variant's scenarios' campaigns in turn; stops at the first interrupted one."""
     if settings.backend not in BACKENDS:
         raise EvaluationError(f"--backend must be one of {', '.join(BACKENDS)}")
-    check_evaluation(out, settings, scenarios, estimators, resume)
-    outcomes: list[tuple[Scenario, CampaignOutcome | None]] = []
-    for scenario in scenarios:
-        if not scenario.components:
-            outcomes.append((scenario, None))
-            continue
-        if execution.progress:
-            print(f"{scenario.name}:", file=sys.stderr, flush=True)
-        source = prepare_scenario(scenario, fmu_paths, out, settings.backend)
-        folder = Path(out) / scenario.name
-        stops = [s for s in (scenario.stop_time, settings.stop_time) if s is not None]
-        outcome = run_campaign(
-            source, folder,
-            CampaignSettings(settings.runs, settings.master_seed, min(stops) if stops else None),
-            execution, resume=has_manifest(folder))
-        outcomes.append((scenario, outcome))
-        if outcome.stopped:
-            break
+    check_evaluation(out, settings, plans, estimators, resume)
+    outcomes: list[Outcome] = []
+    for told, scenarios in plans.items():
+        for scenario in scenarios:
+            if not scenario.components:
+                outcomes.append((told, scenario, None))
+                continue
+            if execution.progress:
+                print(f"{told.name}/{scenario.name}:", file=sys.stderr, flush=True)
+            folder = variant_folder(out, told)
+            source = prepare_scenario(scenario, fmu_paths, folder, settings.backend)
+            stops = [s for s in (scenario.stop_time, settings.stop_time) if s is not None]
+            outcome = run_campaign(
+                source, folder / scenario.name,
+                CampaignSettings(settings.runs, settings.master_seed,
+                                 min(stops) if stops else None),
+                execution, resume=has_manifest(folder / scenario.name))
+            outcomes.append((told, scenario, outcome))
+            if outcome.stopped:
+                return outcomes
     return outcomes
 
 
@@ -234,6 +263,11 @@ class Cell:
         run)."""
         summary = self.summary("rms") if self.runs else None
         return summary.mean if summary is not None else math.nan
+
+
+def estimator_cell(column: list[Cell], estimator: str) -> Cell:
+    """The cell of ``estimator`` in a scenario's ``column``."""
+    return next(c for c in column if c.estimator == estimator)
 
 
 def _series(results, component: str, truth: str) -> Series:
@@ -271,10 +305,21 @@ def scenario_cells(out: Path, scenario: Scenario, estimators: dict[str, Estimato
     return list(cells.values())
 
 
-def evaluation_cells(out: Path, scenarios: list[Scenario],
-                     estimators: dict[str, EstimatorInfo]) -> dict[str, list[Cell]]:
-    """Scenario name -> its cells (one per estimator), nominal scenarios first so that the
-    fault scenarios can compare with their nominal RMS."""
+Cells = dict[str, list[Cell]]
+"""Scenario name -> its cells, one per estimator."""
+
+
+def evaluation_cells(out: Path, plans: Plans, estimators: dict[str, EstimatorInfo],
+                     ) -> dict[Told, Cells]:
+    """Each variant's cells from its campaigns."""
+    return {told: scenarios_cells(variant_folder(out, told), scenarios, estimators)
+            for told, scenarios in plans.items()}
+
+
+def scenarios_cells(out: Path, scenarios: list[Scenario],
+                    estimators: dict[str, EstimatorInfo]) -> Cells:
+    """Scenario name -> its cells (one per estimator) from the campaigns in ``out``, nominal
+    scenarios first so that the fault scenarios can compare with their nominal RMS."""
     cells: dict[str, list[Cell]] = {}
     ordered = sorted(scenarios, key=lambda s: s.nominal is not None)
     for scenario in ordered:

@@ -22,15 +22,17 @@ n/a rules (never run on defaults):
 An estimator reading a source the scenario lacks (YangFusionKF without a radio altimeter) runs
 on what it reads: a stream that never delivers a sample is never fused.
 
-Each estimator gets the scenario's true sensor noise (:func:`sensor_noise`, the contract
-names ``baro_noise``... of ``docs/signals.md``) through the parameters it has: the contract
-name itself, else the variance ``R_<source>`` (σ²) or ``<source>_noise_std`` (σ). In a paper
-scenario it also gets the sensors' error models beyond white noise that the paper system
-states (:data:`altfusion.systems.error_models.SENSOR_ERRORS`: a calibrated barometer, its
-drift, flat terrain, an accelerometer's turn-on bias...) through every parameter it has of
-the stated name or of the same quantity under its own name (:func:`error_parameters`: the
-random walk of the baro height's error is BaselineKF's ``bias_psd``). The paper's own
-estimator keeps its paper's parameters.
+Each estimator can be told the scenario's true sensor noise (:func:`sensor_noise`, the
+contract names ``baro_noise``... of ``docs/signals.md``) through the parameters it has: the
+contract name itself, else the variance ``R_<source>`` (σ²) or ``<source>_noise_std`` (σ). In
+a paper scenario it can also be told the sensors' error models beyond white noise that the
+paper system states (:data:`altfusion.systems.error_models.SENSOR_ERRORS`: a calibrated
+barometer, its drift, flat terrain, an accelerometer's turn-on bias...) through every
+parameter it has of the stated name or of the same quantity under its own name
+(:func:`error_parameters`: the random walk of the baro height's error is BaselineKF's
+``bias_psd``). What it is told, the noise, the models too (the default), nothing or a
+misstated noise, is the evaluation's ``--told`` mode (:mod:`altfusion.evaluation.told`). The
+paper's own estimator keeps its paper's parameters.
 """
 
 import importlib
@@ -42,6 +44,7 @@ from typing import Any
 from altfusion.cosim.instances import fmu_info
 from altfusion.estimators.base import HEIGHT_SOURCES, Estimator
 from altfusion.evaluation.metrics import Fault
+from altfusion.evaluation.told import DEFAULT_TOLD, NOISE_NAMES, Told
 from altfusion.montecarlo.source import CampaignError
 from altfusion.systems.catalog import build_system
 from altfusion.systems.error_models import SENSOR_ERRORS
@@ -75,11 +78,6 @@ REQUIRED_SOURCES: dict[str, dict[str, str]] = {
 }
 """Sources an estimator's algorithm cannot do without, and why; an estimator core class may
 declare its own as ``required_sources`` (a dict of the same form), which takes precedence."""
-
-NOISE_NAMES = ("baro_noise", "gps_noise", "gps_vz_noise", "acc_noise", "radar_noise",
-               "laser_noise")
-"""The contract names of the sensor noises (1σ, SI units)."""
-
 
 class EvaluationError(CampaignError):
     """A scenario or estimator that cannot be evaluated; the message says why."""
@@ -259,9 +257,11 @@ def sensor_inputs(estimator: EstimatorInfo, component: str, sources: dict[str, s
 
 
 def paper_scenario(name: str, estimators: dict[str, EstimatorInfo],
-                   fmu_paths: dict[str, Path], selected: list[str] | None = None) -> Scenario:
+                   fmu_paths: dict[str, Path], selected: list[str] | None = None,
+                   told: Told = DEFAULT_TOLD) -> Scenario:
     """The paper system ``name`` with every applicable estimator of ``selected`` (default:
-    all of ``estimators``) beside its own."""
+    all of ``estimators``) beside its own, each told what ``told`` tells (the paper's own
+    too, as an observer, when ``told.observes_own``)."""
     spec = build_system(name)
     own = spec.component(PAPER_ESTIMATOR)
     truth = next((m.truth for m in spec.metrics if m.estimate == f"{PAPER_ESTIMATOR}.h_est"),
@@ -278,7 +278,7 @@ def paper_scenario(name: str, estimators: dict[str, EstimatorInfo],
     chosen = list(estimators) if selected is None else selected
     components, missing, added, connections = {}, {}, [], []
     for estimator in (estimators[e] for e in chosen):
-        if estimator.name == own.fmu:
+        if estimator.name == own.fmu and not told.observes_own:
             components[estimator.name] = PAPER_ESTIMATOR
             continue
         reason = not_applicable(estimator, set(sources))
@@ -287,11 +287,9 @@ def paper_scenario(name: str, estimators: dict[str, EstimatorInfo],
             continue
         components[estimator.name] = estimator.name
         added.append(ComponentSpec(estimator.name, estimator.name, own.step_size,
-                                   {**noise_parameters(estimator, noise),
-                                    **error_parameters(estimator, errors)}))
+                                   told.tell(noise_parameters(estimator, noise),
+                                             error_parameters(estimator, errors))))
         connections.extend(sensor_inputs(estimator, estimator.name, sources))
-    if own.fmu not in chosen:
-        components.pop(own.fmu, None)
     record, metrics = record_estimators(components, truth)
     kept = tuple(c for c in spec.components if c.name not in dropped)
     spec = replace(
