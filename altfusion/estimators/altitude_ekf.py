@@ -216,7 +216,7 @@ class AltitudeEKF(Estimator):
                                               p.adaptive_max)
                              for name in NOISE_CHECKED if p.adaptive_noise}
         """Each checked source's noise check (none without ``adaptive_noise``)."""
-        self.range_aid = RangeAid((self.aid["radar"], self.aid["laser"]),
+        self.range_aid = RangeAid((self.aid["radar"], self.aid["laser"]), self._heights,
                                   p.range_aid_max_height, p.range_hysteresis) \
             if p.range_aid else None
         """PX4's conditional range aid (None without ``range_aid``)."""
@@ -530,14 +530,14 @@ class AltitudeEKF(Estimator):
 
     def _gate_checked(self, source: str, y: float, S: float) -> bool:
         """The gate of ``source`` (True: fused), its noise check told the verdict."""
-        fused = self.gate(self.aid[source], y, S, self.params.gate_sigma) is Verdict.FUSED
+        verdict = self.gate(self.aid[source], y, S, self.params.gate_sigma)
         check = self.noise_checks.get(source)
         if check is not None:
-            if fused:
-                check.fused(y, S)
+            if verdict in (Verdict.FUSED, Verdict.REJECTED):
+                check.gated(y, S)
             else:
                 check.forget()
-        return fused
+        return verdict is Verdict.FUSED
 
     # ------------------------------------------------------------------ start and resets
     def _offset_index(self, source: str) -> int | None:

@@ -15,8 +15,10 @@ bounded form: xu2016 eqs. 22-24 scale R by the windowed mean normalized innovati
 bounded below by 1): with f the factor on the source's stated variance R in use,
 
     ρ_k = min((y_k - y_(k-1))² / (S_k + S_(k-1)), CLIP)
-    m   ← m + (ρ_k·f - m)/window,    f = min(max(m, 1), maximum)
+    m   ← m + (ρ_k·f - m)/min(n, window),    f = min(max(m, 1), maximum)
 
+(n: the pairs so far: the first ``window`` pairs are averaged alike, so that a source
+sampled at 1-5 Hz is judged within seconds, not after a window of a hundred samples)
 m is an estimate of the ratio of the true noise variance to the stated one: at the fixed
 point E[ρ] = 1, i.e. S holds the true noise. The factor is never below 1 (a quiet spell
 cannot make the filter more confident than the user's figure) and never above ``maximum``
@@ -30,10 +32,14 @@ Deviations from xu2016 (which uses the mean of y²/S itself):
   under a rangefinder) moves successive innovations alike and cancels in their difference,
   so only the scatter the noise makes is read as noise (xu2016's mean square would inflate
   R under a bias, widening the gate that should reject it);
-* only samples the gate passed count, and a pair only when nothing happened between its
-  two samples (no rejection, no reset: :meth:`NoiseCheck.forget`);
+* rejected samples count too, and a pair only when nothing moved the prediction between its
+  two samples (no reset, no re-referencing: :meth:`NoiseCheck.forget`): a source stated so
+  precise that its gate rejects it would otherwise never be inflated, and be isolated for
+  its noise (measured: the GNSS of tests/test_noise_check.py's hover told 5x too small,
+  isolated 10 s in at a factor of 10 with fused samples only);
 * each pair's ratio is clipped at :data:`CLIP`, so that one wild sample within the gate
-  moves m by at most CLIP/window.
+  moves m by at most CLIP/window (once the window is full);
+* the flag waits for :data:`MIN_PAIRS` pairs.
 """
 
 import math
@@ -51,11 +57,16 @@ than twice the stated σ (the accelerometer check's ``BAD``). With the default w
 pairs, m of a source as told has the spread of χ² with about 200 degrees of freedom over
 200: beyond 4 practically never (beyond 1.5 with a probability of about 10⁻⁷)."""
 
+MIN_PAIRS = 20
+"""The flag is set only after this many pairs: the mean of 20 ratios of a source as told
+exceeds 4 with the probability of χ² with 20 degrees of freedom beyond 80, 10⁻⁸ (the
+first pairs alone would flag a source as told once in 22: χ² with one degree beyond 4)."""
+
 
 class NoiseCheck:
     """The noise factor of one source: :attr:`factor` multiplies its stated variance R."""
 
-    __slots__ = ("source", "window", "maximum", "ratio", "factor", "_last")
+    __slots__ = ("source", "window", "maximum", "ratio", "factor", "pairs", "_last")
 
     def __init__(self, source: AidSource, window: float, maximum: float) -> None:
         self.source = source
@@ -67,12 +78,14 @@ class NoiseCheck:
         """m: the windowed estimate of the true noise variance over the stated one."""
         self.factor = 1.0
         """f: the factor on the stated variance in use."""
+        self.pairs = 0
+        """n: the pairs of innovations taken so far."""
         self._last: tuple[float, float] | None = None
-        """(y, S) of the source's previous fused sample; None after a rejection or reset."""
+        """(y, S) of the source's previous gated sample; None after a reset."""
 
-    def fused(self, innovation: float, variance: float) -> None:
-        """A sample of innovation y and variance S (with the present factor) passed its gate:
-        update the ratio and the factor from it and the previous one."""
+    def gated(self, innovation: float, variance: float) -> None:
+        """A sample of innovation y and variance S (with the present factor) was gated, fused
+        or rejected: update the ratio and the factor from it and the previous one."""
         last = self._last
         self._last = (innovation, variance)
         if last is None:
@@ -82,10 +95,11 @@ class NoiseCheck:
             return
         difference = innovation - last[0]
         pair = min(difference * difference / total, CLIP)
-        self.ratio += (pair * self.factor - self.ratio) / self.window
+        self.pairs += 1
+        self.ratio += (pair * self.factor - self.ratio) / min(self.pairs, self.window)
         self.factor = min(max(self.ratio, 1.0), self.maximum)
-        self.source.mark_inflated(self.factor > FLAGGED)
+        self.source.mark_inflated(self.factor > FLAGGED and self.pairs >= MIN_PAIRS)
 
     def forget(self) -> None:
-        """The next sample starts a new pair (after a rejection, a reset or a gap)."""
+        """The next sample starts a new pair (after a reset, a re-referencing or a gap)."""
         self._last = None
