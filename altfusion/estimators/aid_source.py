@@ -92,7 +92,7 @@ class AidSource:
     __slots__ = ("name", "height", "fused_mask", "rejected_mask", "isolated_mask",
                  "inflated_mask", "test_ratio", "rejected", "innovation", "variance",
                  "gate_width", "window", "last_fused", "last_gated", "rejected_since", "biased",
-                 "bits")
+                 "noisy", "bits")
 
     def __init__(self, name: str) -> None:
         self.name = name
@@ -123,6 +123,10 @@ class AidSource:
         """Time of the first of the current run of rejections (None: last sample fused)."""
         self.biased = False
         """The last bias test found the source biased (the test's hysteresis)."""
+        self.noisy = False
+        """Its noise check finds its noise well above the stated
+        (:mod:`~altfusion.estimators.noise_check`): its rejections may be its noise's, so it
+        is not isolated for them."""
         self.bits = 0
         """This source's bits of ``status``."""
 

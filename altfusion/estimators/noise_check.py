@@ -39,7 +39,9 @@ Deviations from xu2016 (which uses the mean of y²/S itself):
   isolated 10 s in at a factor of 10 with fused samples only);
 * each pair's ratio is clipped at :data:`CLIP`, so that one wild sample within the gate
   moves m by at most CLIP/window (once the window is full);
-* the flag waits for :data:`MIN_PAIRS` pairs.
+* the flag waits for :data:`MIN_PAIRS` pairs;
+* a source whose noise is found well above the stated (:data:`NOISY`) is neither isolated
+  nor rejected by the bias test of the fault layer (a biased source told right is).
 """
 
 import math
@@ -56,6 +58,17 @@ FLAGGED = 4.0
 than twice the stated σ (the accelerometer check's ``BAD``). With the default window of 100
 pairs, m of a source as told has the spread of χ² with about 200 degrees of freedom over
 200: beyond 4 practically never (beyond 1.5 with a probability of about 10⁻⁷)."""
+
+NOISY = 2.0
+"""Above this ratio m the source is ``noisy`` (:attr:`AidSource.noisy`): it is not isolated,
+nor rejected for its bias test. While its noise is being found too small its samples fail a
+gate and a bias test sized by the stated noise, and rejecting or isolating it for that would
+leave the height to the others for good
+(measured: the GNSS, the height reference, isolated 3-6 s into yang2020 and xu2016_hover15
+told every noise 5x too small, the height walking 3-65 m off with the baro). A source as
+told exceeds it only in its first pairs (the mean of 20 χ² ratios beyond 2 once in 200); a
+step or a drift does not move the ratio (differences), one wild sample by at most
+CLIP/window."""
 
 MIN_PAIRS = 20
 """The flag is set only after this many pairs: the mean of 20 ratios of a source as told
@@ -99,6 +112,7 @@ class NoiseCheck:
         self.ratio += (pair * self.factor - self.ratio) / min(self.pairs, self.window)
         self.factor = min(max(self.ratio, 1.0), self.maximum)
         self.source.mark_inflated(self.factor > FLAGGED and self.pairs >= MIN_PAIRS)
+        self.source.noisy = self.ratio > NOISY
 
     def forget(self) -> None:
         """The next sample starts a new pair (after a reset, a re-referencing or a gap)."""
