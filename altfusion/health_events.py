@@ -55,8 +55,8 @@ BAD_ACC = "accelerometer found bad (inconsistent with the height sources): noise
 GOOD_ACC = "accelerometer consistent again"
 NOISE_UP = "noise found too small for its innovations: inflated"
 NOISE_OK = "noise back near its stated value"
-RANGE_AID_ON = "range aid: a rangefinder is the height, the terrain held"
-RANGE_AID_OFF = "range aid stopped: the terrain walks again"
+RANGE_AID_ON = "range aid started: a rangefinder is the height"
+RANGE_AID_OFF = "range aid stopped"
 
 SHOWN_LINES = 12
 """Most lines :func:`format_events` prints per estimator; the rest are counted (all are in

@@ -329,8 +329,7 @@ class AltitudeEKF(Estimator):
         if aid.update(self.time):
             walk = 0.0 if self.params.height_ref == "range" else self.params.terrain_psd
             self._q_rw[T] = 0.0 if aid.active else walk
-            self.note(f"range aid {'started' if aid.active else 'stopped'}: the terrain "
-                      f"{'held' if aid.active else 'walks again'}")
+            self.note(f"range aid {'started: the terrain held' if aid.active else 'stopped'}")
         if aid.active:
             self._step_flags |= STEP_BITS.RANGE_AID
 
