@@ -20,7 +20,10 @@ ECOS, a CSV written elsewhere) and need nothing from inside the FMU:
 * ``height reset``: ``n_height_resets`` increased (the height reset onto the rejected
   source's sample, named where the row shows which);
 * ``validity lost`` / ``validity regained``: ``h_valid`` turns false after having been true
-  (no height source fused for ``aiding_timeout``: dead reckoning), and true again.
+  (no height source fused for ``aiding_timeout``: dead reckoning), and true again;
+* the accelerometer found bad and consistent again (``BAD_ACC_VERTICAL`` set, cleared), a
+  source's noise found too small and back (its ``NOISE_INFLATED`` set, cleared), the range
+  aid started and stopped (``RANGE_AID`` set, cleared).
 
 A row's time is the end of the output interval in which the change happened.
 """
@@ -36,13 +39,24 @@ import numpy as np
 
 from altfusion.atomic import write_text
 from altfusion.cosim.results import Results
-from altfusion.estimators.health import HEIGHT_SOURCES, SOURCES, SourceBit, Status, status_bits
+from altfusion.estimators.health import (
+    HEIGHT_SOURCES,
+    NOISE_CHECKED,
+    SOURCES,
+    SourceBit,
+    Status,
+    status_bits,
+)
 
 INITIALIZED, REJECTED, ISOLATED, READMITTED = "initialized", "rejected", "isolated", "re-admitted"
 FALLBACK, HEIGHT_RESET = "fallback", "height reset"
 INVALID, VALID = "validity lost", "validity regained"
 BAD_ACC = "accelerometer found bad (inconsistent with the height sources): noise inflated"
 GOOD_ACC = "accelerometer consistent again"
+NOISE_UP = "noise found too small for its innovations: inflated"
+NOISE_OK = "noise back near its stated value"
+RANGE_AID_ON = "range aid started: a rangefinder is the height"
+RANGE_AID_OFF = "range aid stopped"
 
 SHOWN_LINES = 12
 """Most lines :func:`format_events` prints per estimator; the rest are counted (all are in
@@ -120,7 +134,12 @@ class _EstimatorHistory:
                 found += self.rejections(source)
             if source in HEIGHT_SOURCES:
                 found += self.isolations(source)
-        found += self.resets() + self.validity() + self.accelerometer()
+            if source in NOISE_CHECKED:
+                found += self.flag(self.source_bit(source, SourceBit.NOISE_INFLATED), source,
+                                   NOISE_UP, NOISE_OK)
+        found += self.resets() + self.validity()
+        found += self.flag(self.bit(Status.BAD_ACC_VERTICAL), "", BAD_ACC, GOOD_ACC)
+        found += self.flag(self.bit(Status.RANGE_AID), "", RANGE_AID_ON, RANGE_AID_OFF)
         return found
 
     def rejections(self, source: str) -> list[HealthEvent]:
@@ -169,12 +188,12 @@ class _EstimatorHistory:
             found.append(self.event(row, onto, HEIGHT_RESET, int(added[row])))
         return found
 
-    def accelerometer(self) -> list[HealthEvent]:
-        """The accelerometer found inconsistent with every height source (status bit
-        BAD_ACC_VERTICAL set) and consistent again (cleared)."""
-        bad = self.bit(Status.BAD_ACC_VERTICAL).astype(np.int8)
-        change = np.diff(bad, prepend=0)
-        return [self.event(int(row), "", BAD_ACC if change[row] > 0 else GOOD_ACC)
+    def flag(self, flagged: np.ndarray, source: str, raised: str,
+             cleared: str) -> list[HealthEvent]:
+        """An event ``raised`` where a status bit (``flagged`` per row) is set, ``cleared``
+        where it is cleared again."""
+        change = np.diff(flagged.astype(np.int8), prepend=0)
+        return [self.event(int(row), source, raised if change[row] > 0 else cleared)
                 for row in np.flatnonzero(change)]
 
     def validity(self) -> list[HealthEvent]:

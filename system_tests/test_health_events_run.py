@@ -35,16 +35,20 @@ def block(stdout: str, estimator: str) -> list[str]:
 
 def test_the_baro_step_is_said_in_words(baro_step_run):
     """The barometer steps by 200 m at 130 s (docs/faults.md): every estimator rejects it
-    within one recorded row and isolates it after reset_timeout = 2.5 s."""
+    within one recorded row and isolates it after reset_timeout = 2.5 s. AltitudeEKF's range
+    aid holds from the radio altimeter's first second on the ground to the climb above its
+    25 m limit."""
     out, stdout = baro_step_run
     events = out / "fault_flight+baro_step.events.csv"
     assert f"health events (all in {events}):" in stdout
     said = block(stdout, "AltitudeEKF")
     assert said[0] == "       0.10 s  initialized"
-    assert said[1].startswith("     130.00 s  rejected baro in 26 recorded rows between 130.0 "
+    assert said[1] == "       1.20 s  range aid started: a rangefinder is the height"
+    assert said[2] == "      68.00 s  range aid stopped"
+    assert said[3].startswith("     130.00 s  rejected baro in 26 recorded rows between 130.0 "
                               "and 132.5 s")
-    assert said[2].startswith("     132.50 s  isolated baro (test ratio ")
-    assert said[3] == "     132.50 s  height carried by gps, radar, laser"
+    assert said[4].startswith("     132.50 s  isolated baro (test ratio ")
+    assert said[5] == "     132.50 s  height carried by gps, radar, laser"
     for estimator in ("BaselineKF", "YangFusionKF", "XuSHAEKF"):
         assert any(line.startswith("     132.50 s  isolated baro")
                    for line in block(stdout, estimator)), estimator
@@ -56,4 +60,4 @@ def test_the_summary_decodes_status_by_bit_name(baro_step_run):
     _out, stdout = baro_step_run
     line = next(line for line in stdout.splitlines() if line.startswith("AltitudeEKF.status"))
     assert "final INITIALIZED BARO_REJECTED BARO_ISOLATED GPS_FUSED" in line
-    assert line.endswith("also seen BARO_FUSED")
+    assert line.endswith("also seen RANGE_AID BARO_FUSED")

@@ -15,6 +15,10 @@ from altfusion.health_events import (
     INITIALIZED,
     INVALID,
     ISOLATED,
+    NOISE_OK,
+    NOISE_UP,
+    RANGE_AID_OFF,
+    RANGE_AID_ON,
     READMITTED,
     REJECTED,
     VALID,
@@ -129,3 +133,15 @@ def test_a_bad_accelerometer_reads_as_found_bad_then_consistent_again():
     said = [(round(e.time, 1), e.source, e.what)
             for e in health_events(history(rows)) if e.what in (BAD_ACC, GOOD_ACC)]
     assert said == [(0.2, "", BAD_ACC), (0.5, "", GOOD_ACC)]
+
+
+def test_a_noise_flag_and_the_range_aid_are_said_when_set_and_cleared():
+    fused = ON | BARO_FUSED | GPS_FUSED
+    inflated = fused | source_bit("baro", SourceBit.NOISE_INFLATED)
+    aided = fused | Status.RANGE_AID
+    rows = [(fused, 0.1, 0.1, 1, 0), (inflated, 0.1, 0.1, 1, 0), (inflated, 0.1, 0.1, 1, 0),
+            (aided, 0.1, 0.1, 1, 0), (fused, 0.1, 0.1, 1, 0)]
+    said = [(round(e.time, 1), e.source, e.what) for e in health_events(history(rows))
+            if e.what in (NOISE_UP, NOISE_OK, RANGE_AID_ON, RANGE_AID_OFF)]
+    assert said == [(0.1, "baro", NOISE_UP), (0.3, "baro", NOISE_OK), (0.3, "", RANGE_AID_ON),
+                    (0.4, "", RANGE_AID_OFF)]

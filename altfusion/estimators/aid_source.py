@@ -12,7 +12,12 @@ import math
 from collections import deque
 from enum import Enum
 
-from altfusion.estimators.health import HEIGHT_SOURCES, SourceBit, source_bit
+from altfusion.estimators.health import (
+    HEIGHT_SOURCES,
+    NOISE_CHECKED,
+    SourceBit,
+    source_bit,
+)
 
 MAX_WINDOW_VALUE = 1e100
 """Innovations and variances entering a bias window are clipped to this magnitude, so that
@@ -85,8 +90,9 @@ class AidSource:
     ``acc``) of an estimator: its last sample's gating, its counters and its health."""
 
     __slots__ = ("name", "height", "fused_mask", "rejected_mask", "isolated_mask",
-                 "test_ratio", "rejected", "innovation", "variance", "gate_width", "window",
-                 "last_fused", "last_gated", "rejected_since", "biased", "bits")
+                 "inflated_mask", "test_ratio", "rejected", "innovation", "variance",
+                 "gate_width", "window", "last_fused", "last_gated", "rejected_since", "biased",
+                 "noisy", "bits")
 
     def __init__(self, name: str) -> None:
         self.name = name
@@ -95,6 +101,8 @@ class AidSource:
         self.fused_mask = source_bit(name, SourceBit.FUSED)
         self.rejected_mask = source_bit(name, SourceBit.REJECTED)
         self.isolated_mask = source_bit(name, SourceBit.ISOLATED)
+        self.inflated_mask = source_bit(name, SourceBit.NOISE_INFLATED) \
+            if name in NOISE_CHECKED else 0
         self.test_ratio = 0.0
         """y²/(g²·S) of the last gated sample (PX4's test ratio; > 1: rejected)."""
         self.rejected = 0
@@ -115,6 +123,10 @@ class AidSource:
         """Time of the first of the current run of rejections (None: last sample fused)."""
         self.biased = False
         """The last bias test found the source biased (the test's hysteresis)."""
+        self.noisy = False
+        """Its noise check finds its noise well above the stated
+        (:mod:`~altfusion.estimators.noise_check`): its rejections may be its noise's, so it
+        is not isolated for them."""
         self.bits = 0
         """This source's bits of ``status``."""
 
@@ -127,14 +139,21 @@ class AidSource:
         """A sample of this source is fused at ``now``; it aids the height if it is a height
         source and ``aids_height``."""
         self.rejected_since = None
-        self.bits = self.fused_mask
+        self.bits = self.fused_mask | (self.bits & self.inflated_mask)
         if aids_height and self.height:
             self.last_fused = now
 
     def refused(self) -> None:
-        """A sample of this source is rejected (counted); an isolated source stays so."""
+        """A sample of this source is rejected (counted); an isolated source stays so, and
+        a source whose noise is inflated stays flagged."""
         self.rejected += 1
-        self.bits = self.rejected_mask | (self.bits & self.isolated_mask)
+        self.bits = self.rejected_mask | (self.bits & (self.isolated_mask | self.inflated_mask))
 
     def isolate(self) -> None:
         self.bits |= self.isolated_mask
+
+    def mark_inflated(self, inflated: bool) -> None:
+        """Set (or clear) the source's ``NOISE_INFLATED`` bit
+        (:mod:`~altfusion.estimators.noise_check`)."""
+        self.bits = (self.bits | self.inflated_mask) if inflated \
+            else (self.bits & ~self.inflated_mask)

@@ -52,8 +52,14 @@ Deviations from PX4 EKF2 (reasons in docs/altitude_ekf.md):
   being observed and the remaining sources carry the height without a step;
 * the ground-effect dead zone applies within ``ground_effect_height`` of the terrain (or of
   the starting height), not on a land detector's flag; off by default;
-* optional innovation-based noise adaptation (xu2016): each source's R is scaled by its
-  windowed mean normalized innovation squared, bounded to [1, ``adaptive_max``];
+* each source's noise checked against its innovations (``adaptive_noise``, on by default):
+  its R inflated, within [1, ``adaptive_max``], while the scatter of its innovations shows
+  it too small (xu2016's bounded adaptation, on innovation differences:
+  :mod:`~altfusion.estimators.noise_check`); EKF2 has none;
+* PX4's conditional range aid (``range_aid``): below ``range_aid_max_height`` and while the
+  rangefinders are consistent with flat terrain the terrain state is held, so the
+  rangefinder pins the height (:mod:`~altfusion.estimators.range_aid`; no horizontal-speed
+  condition);
 * the barometer's temperature error (whang2008) is the scale-factor state k, not a
   temperature model: ``baro_p`` and ``baro_T`` are read but not fused.
 """
@@ -63,8 +69,10 @@ from dataclasses import dataclass
 
 from altfusion.errors import ParameterError
 from altfusion.estimators.base import MAX_DELAY, Estimator, HealthParams, Verdict
-from altfusion.estimators.health import UNKNOWN_STD
+from altfusion.estimators.health import NOISE_CHECKED, STEP_BITS, UNKNOWN_STD
 from altfusion.estimators.kalman import quadratic_form, shift_state, update_scalar
+from altfusion.estimators.noise_check import NoiseCheck
+from altfusion.estimators.range_aid import RangeAid
 from altfusion.estimators.streams import ACC, BARO_ALL, GPS_ALL, LASER, RADAR
 from altfusion.params import param
 
@@ -130,12 +138,21 @@ class AltitudeEKFParams(HealthParams):
                                                     "EKF2_GND_EFF_DZ; 0: off)", min=0.0)
     ground_effect_height: float = param(1.0, "m", "Height above the terrain within which the "
                                                   "ground-effect dead zone applies", min=0.0)
-    adaptive_noise: bool = param(False, None, "Scale each source's R by its windowed mean "
-                                              "normalized innovation squared (xu2016)")
-    adaptive_window: float = param(20.0, "1", "Samples in the exponential window of the "
-                                              "noise adaptation", min=1.0)
-    adaptive_max: float = param(10.0, "1", "Largest factor of the noise adaptation",
-                                min=1.0)
+    adaptive_noise: bool = param(True, None, "Check each source's noise against the scatter "
+                                             "of its innovations and inflate its R while "
+                                             "found too small (xu2016's bounded adaptation)")
+    adaptive_window: float = param(100.0, "1", "Pairs of successive innovations in the "
+                                               "exponential window of the noise check",
+                                   min=1.0)
+    adaptive_max: float = param(100.0, "1", "Largest factor of the noise check on a "
+                                            "source's R (100: its σ tenfold)", min=1.0)
+    range_aid: bool = param(True, None, "PX4's conditional range aid (EKF2_RNG_CTRL 1): hold "
+                                        "the terrain while a rangefinder is within "
+                                        "range_aid_max_height and consistent with flat "
+                                        "terrain")
+    range_aid_max_height: float = param(25.0, "m", "The range aid stops above this range "
+                                                   "(PX4 EKF2_RNG_A_HMAX; xu2016's 25 m)",
+                                        positive=True)
     acc_timeout: float = param(0.5, "s", "Without an accelerometer sample for this long the "
                                          "motion model takes over", positive=True)
     baro_delay: float = param(0.0, "s", "Time from a baro measurement to its stamp: the "
@@ -195,7 +212,14 @@ class AltitudeEKF(Estimator):
         self._terrain_known = False
         self._range_on = {"radar": True, "laser": True}
         self._range_rejected_since: dict[str, float] = {}
-        self._nis = {}
+        self.noise_checks = {name: NoiseCheck(self.aid[name], p.adaptive_window,
+                                              p.adaptive_max)
+                             for name in NOISE_CHECKED if p.adaptive_noise}
+        """Each checked source's noise check (none without ``adaptive_noise``)."""
+        self.range_aid = RangeAid((self.aid["radar"], self.aid["laser"]), self._heights,
+                                  p.range_aid_max_height, p.range_hysteresis) \
+            if p.range_aid else None
+        """PX4's conditional range aid (None without ``range_aid``)."""
         self._reference = p.height_ref if p.height_ref != "range" else None
         self._reference_rejected_since: float | None = None
         self._reference_sample = (0.0, 0.0, 1.0)       # its last rejected (z, stamp, σ)
@@ -284,11 +308,32 @@ class AltitudeEKF(Estimator):
         for name, stream, sigma in (("radar", RADAR, self.params.radar_noise),
                                     ("laser", LASER, self.params.laser_noise)):
             sample = samples.get(stream)
-            if sample is not None and self._range_in_use(name, sample[f"{name}_h"]):
-                self._fuse_height(name, sample[f"{name}_h"],
-                                  sample[f"{name}_time"] - self.params.range_delay, sigma)
+            if sample is None:
+                continue
+            reading, stamp = sample[f"{name}_h"], sample[f"{name}_time"] - self.params.range_delay
+            if self.range_aid is not None and self.started:
+                self.range_aid.sample(name, stamp, reading, sigma * sigma, self.x[V],
+                                      self.P[V][V])
+            if self._range_in_use(name, reading):
+                self._fuse_height(name, reading, stamp, sigma)
+            elif name in self.noise_checks:
+                self.noise_checks[name].forget()
+        self._update_range_aid()
         self._ground_constraint()
         self._publish()
+
+    def _update_range_aid(self) -> None:
+        """The conditional range aid decided for this step: the terrain held while it is
+        active (its random walk back when it stops), ``status`` bit ``RANGE_AID``."""
+        aid = self.range_aid
+        if aid is None or not self.started:
+            return
+        if aid.update(self.time):
+            walk = 0.0 if self.params.height_ref == "range" else self.params.terrain_psd
+            self._q_rw[T] = 0.0 if aid.active else walk
+            self.note(f"range aid {'started: the terrain held' if aid.active else 'stopped'}")
+        if aid.active:
+            self._step_flags |= STEP_BITS.RANGE_AID
 
     def _ground_constraint(self) -> None:
         """The vehicle cannot be below the ground its rangefinders see, nor sink into it:
@@ -381,12 +426,11 @@ class AltitudeEKF(Estimator):
         elif self._reference_first(y, S):
             self._fuse_height(source, z, stamp, sigma)     # sets its offset anew
             return
-        if self.gate(self.aid[source], y, S, self.params.gate_sigma) is not Verdict.FUSED:
+        if not self._gate_checked(source, y, S):
             return
         self._range_rejected_since.pop(source, None)
         if source == self._reference:
             self._reference_rejected_since = None
-        self._adapt(source, y * y / S)
         self.x, self.P, _ = update_scalar(self.x, self.P, row, y, R)
 
     def _fuse_speed(self, vz: float, stamp: float) -> None:
@@ -394,11 +438,11 @@ class AltitudeEKF(Estimator):
         row = [(V, 1.0)]
         if delta > 0.0:
             row.append((BA, delta))
-        R = self.params.gps_vz_noise ** 2
+        R = self.params.gps_vz_noise ** 2 * self._adaptation("gps_vz")
         y = vz - v_s
         S = self.P[V][V] + (2.0 * delta * self.P[V][BA] + delta * delta * self.P[BA][BA]
                             if len(row) > 1 else 0.0) + R
-        if self.gate(self.aid["gps_vz"], y, S, self.params.gate_sigma) is Verdict.FUSED:
+        if self._gate_checked("gps_vz", y, S):
             self.x, self.P, _ = update_scalar(self.x, self.P, row, y, R)
 
     def _ground_effect(self, y: float) -> float:
@@ -427,6 +471,9 @@ class AltitudeEKF(Estimator):
                   for i, row in enumerate(self.P)]
         self.P[T][T] = 0.0 if p.height_ref == "range" else S
         self.n_terrain_resets += 1
+        for name, check in self.noise_checks.items():   # both rangefinders' predictions
+            if name in ("radar", "laser"):
+                check.forget()
         self.note(f"{source}: inconsistent for {p.reset_timeout:g} s while the height is "
                   f"aided: terrain reset by {-y:.3g} m")
         self.accept(self.aid[source])
@@ -478,16 +525,20 @@ class AltitudeEKF(Estimator):
                                                  f"{self.params.reset_timeout:g} s")
 
     def _adaptation(self, source: str) -> float:
-        """The factor on R of xu2016's bounded innovation-based adaptation (1: off)."""
-        if not self.params.adaptive_noise:
-            return 1.0
-        return min(max(self._nis.get(source, 1.0), 1.0), self.params.adaptive_max)
+        """The factor on ``source``'s R of its noise check (1: off)."""
+        check = self.noise_checks.get(source)
+        return 1.0 if check is None else check.factor
 
-    def _adapt(self, source: str, nis: float) -> None:
-        if self.params.adaptive_noise:
-            w = 1.0 / self.params.adaptive_window
-            self._nis[source] = (1.0 - w) * self._nis.get(source, 1.0) + w * nis * \
-                self._adaptation(source)
+    def _gate_checked(self, source: str, y: float, S: float) -> bool:
+        """The gate of ``source`` (True: fused), its noise check told the verdict."""
+        verdict = self.gate(self.aid[source], y, S, self.params.gate_sigma)
+        check = self.noise_checks.get(source)
+        if check is not None:
+            if verdict in (Verdict.FUSED, Verdict.REJECTED):
+                check.gated(y, S)
+            else:
+                check.forget()
+        return verdict is Verdict.FUSED
 
     # ------------------------------------------------------------------ start and resets
     def _offset_index(self, source: str) -> int | None:
@@ -589,6 +640,8 @@ class AltitudeEKF(Estimator):
         samples, unless the reset was onto that source."""
         i = V if source == "gps_vz" else H
         shift_state(self.x, self.P, i, innovation, variance)
+        for check in self.noise_checks.values():       # every prediction moved
+            check.forget()
         if i == H:                        # the other sources' offsets: learnt anew
             for owner, known in self._offset_known.items():
                 self._offset_known[owner] = known and source == owner

@@ -25,7 +25,9 @@ class Gating:
         standard deviations of the innovation variance S (``sigmas <= 0``: no gate, ratio 0).
         ``aids_height`` false: the source calibrates another (its fusion does not keep
         ``h_valid`` true). With ``fault_detection`` a sample failing the bias test is
-        rejected too, and a rejected one may reset the state or re-reference its source."""
+        rejected too (unless the source's noise is found too small:
+        :attr:`AidSource.noisy`), and a rejected one may reset the state or re-reference its
+        source."""
         if sigmas > 0.0:
             ratio = innovation * innovation / (sigmas * sigmas * max(variance, 1e-300))
         else:
@@ -34,7 +36,7 @@ class Gating:
         source.innovation, source.variance, source.last_gated = innovation, variance, self.time
         biased = sigmas > 0.0 and self.params.fault_detection and faults.bias_test(
             source, self._heights, self.time, self.params.reset_timeout, innovation,
-            variance, sigmas) and not self._accelerometer_suspect()
+            variance, sigmas) and not source.noisy and not self._accelerometer_suspect()
         if ratio <= 1.0 and not biased:
             if sigmas > 0.0:
                 source.gate_width = sigmas * math.sqrt(max(variance, 0.0))
@@ -86,14 +88,16 @@ class Gating:
     def _reject(self, source: AidSource, innovation: float, ratio: float,
                 biased: bool) -> Verdict:
         """Count the rejection; with ``fault_detection`` isolate a source rejected for
-        ``reset_timeout`` that is biased or contradicted by another source."""
+        ``reset_timeout`` that is biased or contradicted by another source (not one whose
+        noise is found too small: :attr:`AidSource.noisy`)."""
         source.refused()
         self.n_rejected += 1
         now = self.time
         if (self.params.fault_detection
                 and now - source.rejected_since >= self.params.reset_timeout
                 and (biased or self.contradicted(source, innovation))
-                and not source.isolated and not self._accelerometer_suspect()):
+                and not source.isolated and not source.noisy
+                and not self._accelerometer_suspect()):
             source.isolate()
             self.note(f"{source.name}: rejected for {now - source.rejected_since:.3g} s while "
                       f"other sources are fused: isolated until a sample passes the gate")

@@ -16,6 +16,12 @@ HEIGHT_SOURCES = ("baro", "gps", "radar", "laser")
 SOURCES = (*HEIGHT_SOURCES, "gps_vz", "acc")
 """Every source with a test ratio and a rejection count, in the order of their status bits."""
 
+NOISE_CHECKED = (*HEIGHT_SOURCES, "gps_vz")
+"""The sources whose stated noise is checked against their innovations
+(:mod:`~altfusion.estimators.noise_check`): not the accelerometer, which has its own check
+(:mod:`~altfusion.estimators.accelerometer_check`), and whose bit 3 would be bit 31, the sign
+bit of an FMI Integer."""
+
 
 UNKNOWN_STD = 1e5
 """``h_std`` of an estimator not yet initialized, m (with ``h_valid`` false): ±100 km, the
@@ -43,6 +49,10 @@ class Status(IntFlag):
     """The accelerometer is inconsistent with every height source and its noise inflated
     more than twofold (PX4 EKF2's ``bad_acc_vertical``;
     :mod:`~altfusion.estimators.accelerometer_check`)."""
+    RANGE_AID = 1 << 7
+    """A rangefinder is used as the height: it is within its height limit and consistent
+    with flat terrain, and the terrain under it is held (PX4 EKF2's conditional range aid;
+    :mod:`~altfusion.estimators.range_aid`)."""
 
 
 STEP_BITS = SimpleNamespace(**{flag.name: int(flag) for flag in Status})
@@ -60,6 +70,10 @@ class SourceBit(IntEnum):
     ISOLATED = 2
     """The height source is declared faulty: rejected for ``reset_timeout`` while another
     height source that pins the height tighter was fused (height sources only)."""
+    NOISE_INFLATED = 3
+    """The source's stated noise is found too small for its innovations and its variance
+    inflated more than fourfold (the sources of :data:`NOISE_CHECKED` only;
+    :mod:`~altfusion.estimators.noise_check`)."""
 
 
 def source_bit(source: str, bit: SourceBit) -> int:
@@ -71,6 +85,14 @@ def status_bits() -> dict[str, int]:
     """Every documented ``status`` bit: name -> mask."""
     bits = {flag.name: int(flag) for flag in Status}
     bits.update({f"{source.upper()}_{bit.name}": source_bit(source, bit)
-                 for source in SOURCES for bit in SourceBit
-                 if bit is not SourceBit.ISOLATED or source in HEIGHT_SOURCES})
+                 for source in SOURCES for bit in SourceBit if _applies(bit, source)})
     return bits
+
+
+def _applies(bit: SourceBit, source: str) -> bool:
+    """True if ``source`` can set ``bit``."""
+    if bit is SourceBit.ISOLATED:
+        return source in HEIGHT_SOURCES
+    if bit is SourceBit.NOISE_INFLATED:
+        return source in NOISE_CHECKED
+    return True

@@ -64,8 +64,8 @@ def contract_output(name: str, reads_at_step_end: tuple[str, ...] | None = None,
 def status_description() -> str:
     """The ``status`` output's description: every bit and its meaning."""
     common = ", ".join(f"{flag.bit_length() - 1} {flag.name}" for flag in Status)
-    per_source = ", ".join(f"+{bit.value} {bit.name}" for bit in SourceBit)
-    per_source += " (height sources)"
+    which = {SourceBit.ISOLATED: " (height sources)", SourceBit.NOISE_INFLATED: " (not acc)"}
+    per_source = ", ".join(f"+{bit.value} {bit.name}{which.get(bit, '')}" for bit in SourceBit)
     return (f"Status bit field: {common}; per source i (baro 0, gps 1, radar 2, laser 3, "
             f"gps_vz 4, acc 5) bit 8 + 4 i {per_source} (docs/estimator_health.md)")
 

@@ -1,0 +1,119 @@
+"""Each source's stated noise checked against its innovations, and inflated, within bounds,
+while it is found too small.
+
+A user tells an estimator the noise of each sensor from its data sheet; the sensor on the
+vehicle is often noisier (vibration, quantization, a different mounting). A noise stated too
+small makes the filter overconfident: its ``h_std`` shrinks while the error does not, and a
+consistent sample may fail its gate. The innovations show it: for a consistent filter each
+innovation y_k has the variance S_k the filter computes, and successive innovations are
+uncorrelated (the innovation sequence of a Kalman filter is white; Mehra 1970), so
+
+    E[(y_k - y_(k-1))²] = S_k + S_(k-1).
+
+Check, at each gated sample of a source (after Mehra's covariance matching, in xu2016's
+bounded form: xu2016 eqs. 22-24 scale R by the windowed mean normalized innovation squared,
+bounded below by 1): with f the factor on the source's stated variance R in use,
+
+    ρ_k = min((y_k - y_(k-1))² / (S_k + S_(k-1)), CLIP)
+    m   ← m + (ρ_k·f - m)/min(n, window),    f = min(max(m, 1), maximum)
+
+(n: the pairs so far: the first ``window`` pairs are averaged alike, so that a source
+sampled at 1-5 Hz is judged within seconds, not after a window of a hundred samples)
+m is an estimate of the ratio of the true noise variance to the stated one: at the fixed
+point E[ρ] = 1, i.e. S holds the true noise. The factor is never below 1 (a quiet spell
+cannot make the filter more confident than the user's figure) and never above ``maximum``
+(beyond it the sensor is not the one described, and the fault layer judges it). A source's
+``status`` bit ``NOISE_INFLATED`` is set while f exceeds :data:`FLAGGED`.
+
+Deviations from xu2016 (which uses the mean of y²/S itself):
+
+* the *differences* of successive innovations, not the innovations: a bias, a drift or an
+  offset not yet learnt (a baro offset, a GNSS step before its isolation, a terrain step
+  under a rangefinder) moves successive innovations alike and cancels in their difference,
+  so only the scatter the noise makes is read as noise (xu2016's mean square would inflate
+  R under a bias, widening the gate that should reject it);
+* rejected samples count too, and a pair only when nothing moved the prediction between its
+  two samples (no reset, no re-referencing: :meth:`NoiseCheck.forget`): a source stated so
+  precise that its gate rejects it would otherwise never be inflated, and be isolated for
+  its noise (measured: the GNSS of tests/test_noise_check.py's hover told 5x too small,
+  isolated 10 s in at a factor of 10 with fused samples only);
+* each pair's ratio is clipped at :data:`CLIP`, so that one wild sample within the gate
+  moves m by at most CLIP/window (once the window is full);
+* the flag waits for :data:`MIN_PAIRS` pairs;
+* a source whose noise is found well above the stated (:data:`NOISY`) is neither isolated
+  nor rejected by the bias test of the fault layer (a biased source told right is).
+"""
+
+import math
+
+from altfusion.estimators.aid_source import AidSource
+
+CLIP = 25.0
+"""Largest contribution of one pair of innovations to the ratio (the square of the 5σ gate:
+a consistent pair exceeds it once in 1.7 million; two samples each within a 5σ gate can
+reach 50)."""
+
+FLAGGED = 4.0
+"""``NOISE_INFLATED`` is set while the variance factor exceeds this: the noise in use more
+than twice the stated σ (the accelerometer check's ``BAD``). With the default window of 100
+pairs, m of a source as told has the spread of χ² with about 200 degrees of freedom over
+200: beyond 4 practically never (beyond 1.5 with a probability of about 10⁻⁷)."""
+
+NOISY = 2.0
+"""Above this ratio m the source is ``noisy`` (:attr:`AidSource.noisy`): it is not isolated,
+nor rejected for its bias test. While its noise is being found too small its samples fail a
+gate and a bias test sized by the stated noise, and rejecting or isolating it for that would
+leave the height to the others for good
+(measured: the GNSS, the height reference, isolated 3-6 s into yang2020 and xu2016_hover15
+told every noise 5x too small, the height walking 3-65 m off with the baro). A source as
+told exceeds it only in its first pairs (the mean of 20 χ² ratios beyond 2 once in 200); a
+step or a drift does not move the ratio (differences), one wild sample by at most
+CLIP/window."""
+
+MIN_PAIRS = 20
+"""The flag is set only after this many pairs: the mean of 20 ratios of a source as told
+exceeds 4 with the probability of χ² with 20 degrees of freedom beyond 80, 10⁻⁸ (the
+first pairs alone would flag a source as told once in 22: χ² with one degree beyond 4)."""
+
+
+class NoiseCheck:
+    """The noise factor of one source: :attr:`factor` multiplies its stated variance R."""
+
+    __slots__ = ("source", "window", "maximum", "ratio", "factor", "pairs", "_last")
+
+    def __init__(self, source: AidSource, window: float, maximum: float) -> None:
+        self.source = source
+        self.window = window
+        """Pairs in the exponential window of the ratio's average."""
+        self.maximum = maximum
+        """Largest factor on the variance."""
+        self.ratio = 1.0
+        """m: the windowed estimate of the true noise variance over the stated one."""
+        self.factor = 1.0
+        """f: the factor on the stated variance in use."""
+        self.pairs = 0
+        """n: the pairs of innovations taken so far."""
+        self._last: tuple[float, float] | None = None
+        """(y, S) of the source's previous gated sample; None after a reset."""
+
+    def gated(self, innovation: float, variance: float) -> None:
+        """A sample of innovation y and variance S (with the present factor) was gated, fused
+        or rejected: update the ratio and the factor from it and the previous one."""
+        last = self._last
+        self._last = (innovation, variance)
+        if last is None:
+            return
+        total = variance + last[1]
+        if not total > 0.0 or not math.isfinite(total):
+            return
+        difference = innovation - last[0]
+        pair = min(difference * difference / total, CLIP)
+        self.pairs += 1
+        self.ratio += (pair * self.factor - self.ratio) / min(self.pairs, self.window)
+        self.factor = min(max(self.ratio, 1.0), self.maximum)
+        self.source.mark_inflated(self.factor > FLAGGED and self.pairs >= MIN_PAIRS)
+        self.source.noisy = self.ratio > NOISY
+
+    def forget(self) -> None:
+        """The next sample starts a new pair (after a reset, a re-referencing or a gap)."""
+        self._last = None

@@ -1,0 +1,117 @@
+"""Each source's stated noise checked against its innovations (noise_check): the check on
+hand-made innovations, then AltitudeEKF on the hover of tests/test_altitude_ekf.py told every
+noise five times too small, and told it right."""
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from altfusion.estimators import noise_check
+from altfusion.estimators.aid_source import AidSource
+from altfusion.estimators.health import SourceBit, source_bit
+from altfusion.estimators.noise_check import NoiseCheck
+
+sys.path.insert(0, str(Path(__file__).parent))
+from test_altitude_ekf import NOISE, TRUE_H, Flight  # noqa: E402
+
+
+def checked(scale: float, samples: int, seed: int = 1, bias: float = 0.0,
+            maximum: float = 100.0) -> NoiseCheck:
+    """A check of window 100 fed ``samples`` innovations whose noise variance is ``scale``
+    times the stated R = 1 (S = f·R: the prediction's variance negligible), plus ``bias``."""
+    check = NoiseCheck(AidSource("baro"), 100.0, maximum)
+    noise = np.random.default_rng(seed).standard_normal(samples) * np.sqrt(scale)
+    for value in noise:
+        check.gated(bias + value, check.factor)
+    return check
+
+
+def test_a_noise_as_stated_is_not_inflated_beyond_a_few_tenths_and_never_flagged():
+    """10 000 pairs of a source as told: m is the mean of about 200 χ² ratios of one degree
+    (the window of 100 pairs, exponential): standard deviation √(2/199) = 0.10, so m stays
+    below 1.6 (6 standard deviations) and the flag (factor > 4) is never set."""
+    source = AidSource("baro")
+    check = NoiseCheck(source, 100.0, 100.0)
+    noise = np.random.default_rng(3).standard_normal(10_000)
+    factors = []
+    for value in noise:
+        check.gated(value, check.factor)
+        factors.append(check.factor)
+        assert not source.bits & source.inflated_mask
+    assert max(factors[100:]) < 1.6
+
+
+@pytest.mark.parametrize("scale", [9.0, 25.0])
+def test_a_noise_stated_too_small_is_inflated_to_its_true_variance(scale):
+    """Innovations of 9x and 25x the stated variance (σ 3x and 5x): after 2000 pairs the
+    factor is the true ratio within 35 % (the window's spread is 10 %, and its fixed point
+    lies a few percent low: the clipped ratios and the product of m with its own noise) and
+    the source is flagged."""
+    check = checked(scale, 2000)
+    assert check.factor == pytest.approx(scale, rel=0.35)
+    assert check.source.bits & source_bit("baro", SourceBit.NOISE_INFLATED)
+
+
+def test_a_bias_is_not_read_as_noise():
+    """A constant offset of 10 standard deviations on the innovations cancels in their
+    differences: the factor stays that of the noise alone (below 1.6 as above)."""
+    assert checked(1.0, 2000, bias=10.0).factor < 1.6
+
+
+def test_the_inflation_is_bounded_and_forgetting_starts_a_new_pair():
+    check = checked(10_000.0, 2000, maximum=50.0)
+    assert check.factor == 50.0
+    pairs = check.pairs
+    check.forget()
+    check.gated(1e6, 1.0)                    # no previous sample: no pair
+    assert check.pairs == pairs
+
+
+def test_the_flag_waits_for_its_pairs():
+    check = checked(25.0, noise_check.MIN_PAIRS - 1)
+    assert check.factor > noise_check.FLAGGED
+    assert not check.source.bits & check.source.inflated_mask
+
+
+def hover(scale: float, seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """AltitudeEKF told every noise of the hover's sensors times ``scale`` (baro, GNSS,
+    accelerometer, laser), flown 70 s: the height error, h_std and status of the last
+    60 s."""
+    flight = Flight(seed=seed, **{name: value * scale for name, value in NOISE.items()})
+    flight.fly(10.0, laser=0.0)
+    rows = []
+    flight.fly(60.0, laser=0.0, record=rows)
+    assert all(r[3] for r in rows)
+    error = np.array([r[1] - TRUE_H for r in rows])
+    std = np.array([r[2] for r in rows])
+    return error, std, np.array([r[4] for r in rows], dtype=np.int64)
+
+
+SEEDS = range(1, 5)
+INFLATED = (source_bit("baro", SourceBit.NOISE_INFLATED)
+            | source_bit("gps", SourceBit.NOISE_INFLATED)
+            | source_bit("laser", SourceBit.NOISE_INFLATED))
+
+
+def test_noise_told_five_times_too_small_is_inflated_and_the_height_stays_honest():
+    """Every noise told 0.2x: the baro, GNSS and laser are flagged by the end of each run
+    and |e| <= 2 h_std at least 80 % of the time over the seeds together (issue 29's target).
+    Measured 0.97, 0.98, 1.00, 0.94 per seed, 0.97 together; without the check 0.00-0.12,
+    0.06 together; with the check but a GNSS rejected and isolated by the bias test while its
+    noise was still being learnt (before ``noisy`` sources were spared) 0.41 on seed 1. The
+    per-seed spread (0.03) puts 0.80 far below the measured figure: the test fails if the
+    check stops inflating or the fault layer shuts the GNSS out again."""
+    covered = []
+    for seed in SEEDS:
+        error, std, status = hover(0.2, seed)
+        assert status[-1] & INFLATED == INFLATED, seed
+        covered.append(np.abs(error) <= 2.0 * std)
+    assert np.mean(covered) >= 0.80
+
+
+def test_noise_as_told_is_never_flagged():
+    for seed in SEEDS:
+        _, _, status = hover(1.0, seed)
+        assert not (status & INFLATED).any(), seed
