@@ -229,7 +229,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'estimator': '525d13579af2ee59',
     },
     ('yang2020_altitude_ekf', True): {
-        'estimator': 'b1b2b9e79ac188b6',
+        'estimator': '2a4d45771e69b287',
     },
     ('yang2020_altitude_ekf', False): {
         'estimator': 'b1b2b9e79ac188b6',
