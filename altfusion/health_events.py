@@ -20,7 +20,10 @@ ECOS, a CSV written elsewhere) and need nothing from inside the FMU:
 * ``height reset``: ``n_height_resets`` increased (the height reset onto the rejected
   source's sample, named where the row shows which);
 * ``validity lost`` / ``validity regained``: ``h_valid`` turns false after having been true
-  (no height source fused for ``aiding_timeout``: dead reckoning), and true again.
+  (no height source fused for ``aiding_timeout``: dead reckoning), and true again;
+* the estimator-wide flags: the accelerometer found bad and consistent again
+  (``BAD_ACC_VERTICAL``), the motion model's process noise raised and back near the stated
+  (``PROCESS_NOISE_ADAPTED``).
 
 A row's time is the end of the output interval in which the change happened.
 """
@@ -43,6 +46,9 @@ FALLBACK, HEIGHT_RESET = "fallback", "height reset"
 INVALID, VALID = "validity lost", "validity regained"
 BAD_ACC = "accelerometer found bad (inconsistent with the height sources): noise inflated"
 GOOD_ACC = "accelerometer consistent again"
+RAISED_MOTION = ("motion model found lagging (every source off the prediction): process "
+                 "noise raised")
+STATED_MOTION = "motion model's process noise back near the stated"
 
 SHOWN_LINES = 12
 """Most lines :func:`format_events` prints per estimator; the rest are counted (all are in
@@ -120,7 +126,7 @@ class _EstimatorHistory:
                 found += self.rejections(source)
             if source in HEIGHT_SOURCES:
                 found += self.isolations(source)
-        found += self.resets() + self.validity() + self.accelerometer()
+        found += self.resets() + self.validity() + self.accelerometer() + self.motion_noise()
         return found
 
     def rejections(self, source: str) -> list[HealthEvent]:
@@ -172,9 +178,18 @@ class _EstimatorHistory:
     def accelerometer(self) -> list[HealthEvent]:
         """The accelerometer found inconsistent with every height source (status bit
         BAD_ACC_VERTICAL set) and consistent again (cleared)."""
-        bad = self.bit(Status.BAD_ACC_VERTICAL).astype(np.int8)
-        change = np.diff(bad, prepend=0)
-        return [self.event(int(row), "", BAD_ACC if change[row] > 0 else GOOD_ACC)
+        return self.flag(Status.BAD_ACC_VERTICAL, BAD_ACC, GOOD_ACC)
+
+    def motion_noise(self) -> list[HealthEvent]:
+        """The motion model's process noise raised (status bit PROCESS_NOISE_ADAPTED set)
+        and back near the stated (cleared)."""
+        return self.flag(Status.PROCESS_NOISE_ADAPTED, RAISED_MOTION, STATED_MOTION)
+
+    def flag(self, mask: int, on: str, off: str) -> list[HealthEvent]:
+        """An estimator-wide event ``on`` where the bit ``mask`` is set, ``off`` where it
+        is cleared."""
+        change = np.diff(self.bit(mask).astype(np.int8), prepend=0)
+        return [self.event(int(row), "", on if change[row] > 0 else off)
                 for row in np.flatnonzero(change)]
 
     def validity(self) -> list[HealthEvent]:

@@ -43,6 +43,10 @@ class Status(IntFlag):
     """The accelerometer is inconsistent with every height source and its noise inflated
     more than twofold (PX4 EKF2's ``bad_acc_vertical``;
     :mod:`~altfusion.estimators.accelerometer_check`)."""
+    PROCESS_NOISE_ADAPTED = 1 << 6
+    """The motion model's process noise is raised more than twofold above the stated one:
+    every source found the prediction off, as in a manoeuvre the stated noise cannot follow
+    (AltitudeEKF without an accelerometer; :mod:`~altfusion.estimators.process_noise`)."""
 
 
 STEP_BITS = SimpleNamespace(**{flag.name: int(flag) for flag in Status})

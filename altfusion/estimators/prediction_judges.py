@@ -11,10 +11,11 @@ Each judgement is one source's disagreement with the prediction: a name, whether
 height source, a disagreement y (m or m/s: the mean of its recent innovations) and the
 variance of y if the prediction were right. The prediction is *inconsistent* when at least
 ``min_judges`` independent judges disagree with it by more than :data:`SIGMAS` standard
-deviations, the height sources among them on one side (a speed's error and a height's need
-not share their sign), and no height source that agrees pins the height tighter than the
-smallest of the disagreements (a 5 mm laser that agrees with the prediction clears it; a
-30 m GNSS cannot tell a 3 m error). The rangefinders count as one judge (:data:`RANGE`):
+deviations (or as many as the caller asks), the height sources among them on one side (a
+speed on any side, or, where the prediction is a motion model, on theirs: its lag moves its
+height and speed the same way), and no height source that agrees pins the height tighter
+than the smallest of the disagreements (a 5 mm laser that agrees with the prediction clears
+it; a 30 m GNSS cannot tell a 3 m error). The rangefinders count as one judge (:data:`RANGE`):
 both measure above the same terrain, and a terrain step moves both of their innovations as
 an error of the prediction would.
 
@@ -46,25 +47,33 @@ def judge(name: str) -> str:
     return RANGE if name in RANGE_SOURCES else name
 
 
-def inconsistent(judgements: Iterable[Judgement], min_judges: int = MIN_SOURCES) -> bool:
+def inconsistent(judgements: Iterable[Judgement], min_judges: int = MIN_SOURCES,
+                 speeds_on_side: bool = False, sigmas: float = SIGMAS) -> bool:
     """True if at least ``min_judges`` judges (:func:`judge`) of ``judgements`` disagree
-    with the prediction beyond :data:`SIGMAS` standard deviations, the height sources among
+    with the prediction beyond ``sigmas`` standard deviations, the height sources among
     them all on one side, and no height source that agrees pins the height tighter than
-    the smallest of their disagreements. Compared squared (no square roots)."""
+    the smallest of their disagreements. With ``speeds_on_side`` a speed (a judgement that
+    is no height source's) counts only on the height sources' side: where the prediction's
+    speed is off, its height drifts off the same way (a lagging motion model); a speed off
+    the other way is no such evidence. Compared squared (no square roots)."""
     sign = 0
     beyond: set[str] = set()
+    speeds: list[tuple[str, int]] = []
     smallest, pinned = math.inf, math.inf             # squared
     for name, height, y, variance in judgements:
-        bound = SIGMAS * SIGMAS * variance
+        bound = sigmas * sigmas * variance
         if y * y <= bound:
             if height and bound < pinned:
                 pinned = bound
             continue
+        side = 1 if y > 0.0 else -1
+        if not height:
+            speeds.append((name, side))
+            continue
         beyond.add(judge(name))
-        if height:
-            side = 1 if y > 0.0 else -1
-            if sign and side != sign:
-                return False
-            sign = side
-            smallest = min(smallest, y * y)
+        if sign and side != sign:
+            return False
+        sign = side
+        smallest = min(smallest, y * y)
+    beyond.update(name for name, side in speeds if side == sign or not speeds_on_side)
     return len(beyond) >= min_judges and pinned >= smallest
