@@ -23,7 +23,8 @@ ECOS, a CSV written elsewhere) and need nothing from inside the FMU:
   (no height source fused for ``aiding_timeout``: dead reckoning), and true again;
 * the accelerometer found bad and consistent again (``BAD_ACC_VERTICAL`` set, cleared), a
   source's noise found too small and back (its ``NOISE_INFLATED`` set, cleared), the range
-  aid started and stopped (``RANGE_AID`` set, cleared).
+  aid started and stopped (``RANGE_AID`` set, cleared), the motion model's process noise
+  raised and back near the stated (``PROCESS_NOISE_ADAPTED`` set, cleared).
 
 A row's time is the end of the output interval in which the change happened.
 """
@@ -51,12 +52,16 @@ from altfusion.estimators.health import (
 INITIALIZED, REJECTED, ISOLATED, READMITTED = "initialized", "rejected", "isolated", "re-admitted"
 FALLBACK, HEIGHT_RESET = "fallback", "height reset"
 INVALID, VALID = "validity lost", "validity regained"
-BAD_ACC = "accelerometer found bad (inconsistent with the height sources): noise inflated"
+BAD_ACC = ("accelerometer found bad (noisier than told, or inconsistent with the height "
+           "sources): noise inflated")
 GOOD_ACC = "accelerometer consistent again"
 NOISE_UP = "noise found too small for its innovations: inflated"
 NOISE_OK = "noise back near its stated value"
 RANGE_AID_ON = "range aid started: a rangefinder is the height"
 RANGE_AID_OFF = "range aid stopped"
+RAISED_MOTION = ("motion model found lagging (every source off the prediction): process "
+                 "noise raised")
+STATED_MOTION = "motion model's process noise back near the stated"
 
 SHOWN_LINES = 12
 """Most lines :func:`format_events` prints per estimator; the rest are counted (all are in
@@ -140,6 +145,8 @@ class _EstimatorHistory:
         found += self.resets() + self.validity()
         found += self.flag(self.bit(Status.BAD_ACC_VERTICAL), "", BAD_ACC, GOOD_ACC)
         found += self.flag(self.bit(Status.RANGE_AID), "", RANGE_AID_ON, RANGE_AID_OFF)
+        found += self.flag(self.bit(Status.PROCESS_NOISE_ADAPTED), "", RAISED_MOTION,
+                           STATED_MOTION)
         return found
 
     def rejections(self, source: str) -> list[HealthEvent]:

@@ -4,6 +4,7 @@ h_valid, n_height_resets, test ratios): the same from any host's results."""
 import math
 
 import numpy as np
+import pytest
 
 from altfusion.cosim.results import Results
 from altfusion.estimators.health import SourceBit, Status, source_bit
@@ -17,10 +18,12 @@ from altfusion.health_events import (
     ISOLATED,
     NOISE_OK,
     NOISE_UP,
+    RAISED_MOTION,
     RANGE_AID_OFF,
     RANGE_AID_ON,
     READMITTED,
     REJECTED,
+    STATED_MOTION,
     VALID,
     HealthEvent,
     events_csv,
@@ -126,13 +129,18 @@ def test_status_bits_are_named_and_the_csv_lists_every_event():
         "3,1.5,est,baro,isolated,9,1,1", "3,2,est,,validity regained,nan,1,1"]
 
 
-def test_a_bad_accelerometer_reads_as_found_bad_then_consistent_again():
+@pytest.mark.parametrize(("bit", "on", "off"), [
+    (Status.BAD_ACC_VERTICAL, BAD_ACC, GOOD_ACC),
+    (Status.PROCESS_NOISE_ADAPTED, RAISED_MOTION, STATED_MOTION),
+], ids=["bad-accelerometer", "motion-noise"])
+def test_an_estimator_flag_reads_as_set_then_cleared(bit, on, off):
     fused = ON | BARO_FUSED | GPS_FUSED
-    bad = fused | Status.BAD_ACC_VERTICAL
-    rows = [(fused, 0.1, 0.1, 1, 0)] * 2 + [(bad, 0.1, 0.1, 1, 0)] * 3 + [(fused, 0.1, 0.1, 1, 0)]
+    flagged = fused | bit
+    rows = [(fused, 0.1, 0.1, 1, 0)] * 2 + [(flagged, 0.1, 0.1, 1, 0)] * 3 \
+        + [(fused, 0.1, 0.1, 1, 0)]
     said = [(round(e.time, 1), e.source, e.what)
-            for e in health_events(history(rows)) if e.what in (BAD_ACC, GOOD_ACC)]
-    assert said == [(0.2, "", BAD_ACC), (0.5, "", GOOD_ACC)]
+            for e in health_events(history(rows)) if e.what in (on, off)]
+    assert said == [(0.2, "", on), (0.5, "", off)]
 
 
 def test_a_noise_flag_and_the_range_aid_are_said_when_set_and_cleared():

@@ -26,16 +26,18 @@ where the evidence puts it, never below the stated noise):
   there only the scatter counts.
 
 Check, every :data:`PERIOD` (PX4 EKF2 ``checkVerticalAccelerationHealth``, at every IMU
-sample): the prediction is *inconsistent* when, of the aid sources that judge it (height
-sources and the GNSS vertical speed; isolated ones left out) gated within :data:`WINDOW`, at
-least :data:`MIN_SOURCES` independent ones disagree with it by more than :data:`SIGMAS`
-standard deviations, the height sources among them on one side, and none of the others pins
-it tighter than those disagreements (a source that precise and consistent says the
-prediction is right). A height source's disagreement is the mean of its innovations over
-its bias window (over seconds, many coarse samples see a drift no single one can), the GNSS
-speed's its last innovation. The accelerometer's noise is too small for what the
-prediction shows when more than :data:`FRACTION` of the checks of the last :data:`WINDOW`
-(an exponential average of that time constant) were inconsistent.
+sample): the prediction is *inconsistent*
+(:func:`~altfusion.estimators.prediction_judges.inconsistent`) when, of the aid sources
+that judge it (height sources and the GNSS vertical speed; isolated ones left out) gated
+within :data:`WINDOW`, at least two independent ones disagree with it by more than
+:data:`~altfusion.estimators.prediction_judges.SIGMAS` standard deviations, the height
+sources among them on one side, and none of the others pins it tighter than those
+disagreements (a source that precise and consistent says the prediction is right). A height
+source's disagreement is the mean of its innovations over its bias window (over seconds,
+many coarse samples see a drift no single one can), the GNSS speed's its last innovation.
+The accelerometer's noise is too small for what the prediction shows when more than
+:data:`FRACTION` of the checks of the last :data:`WINDOW` (an exponential average of that
+time constant) were inconsistent.
 
 Then its noise is inflated, by :data:`GROWTH` at most every :data:`ESCALATION` while the
 checks stay inconsistent, up to the accelerometer's clipping level (an accelerometer noisier
@@ -57,19 +59,17 @@ scatter sets the noise.
 import math
 import statistics
 from collections import deque
+from collections.abc import Iterator
 
 from altfusion.estimators.aid_source import AidSource
 from altfusion.estimators.fault_detection import BIAS_MIN_SAMPLES
+from altfusion.estimators.prediction_judges import Judgement, inconsistent
 from altfusion.estimators.streams import ACC_CLIP
 
 PERIOD = 0.1
 """The check runs at most this often, s (at every estimator step when that is longer): its
 evidence moves over seconds, and a check at every 10 ms step cost 10 µs, a fifth of an
 estimator's step."""
-
-SIGMAS = 3.0
-"""An innovation beyond this many standard deviations counts against the prediction (PX4
-EKF2's vertical innovation test limit, 3)."""
 
 WINDOW = 1.0
 """Time constant of the fraction of inconsistent checks, and how recent a source's last
@@ -83,14 +83,6 @@ PROBATION = 10.0
 """The accelerometer stays suspect this long after the last time the checks found it
 inconsistent, s (PX4 BADACC_PROBATION): long enough for the inflated noise to bring the
 prediction back onto the sources before any of them can be isolated for its fault."""
-
-MIN_SOURCES = 2
-"""Fewest independent judges of the prediction for a step to count: with one height source
-alone, that source could be the one off."""
-
-RANGE, RANGE_SOURCES = "range", ("radar", "laser")
-"""The rangefinders count as one judge: both measure above the same terrain, and a terrain
-step moves both of their innovations as an accelerometer error would."""
 
 GROWTH = 4.0
 """Factor of the noise's inflation at each :data:`ESCALATION` over which the checks stay
@@ -188,8 +180,8 @@ class AccelerometerCheck:
             return
         self._last = now
         elapsed = min(elapsed, PERIOD if elapsed == math.inf else WINDOW)   # the first: one
-        inconsistent = 1.0 if _inconsistent(self.judges, now) else 0.0
-        self.fraction += elapsed / WINDOW * (inconsistent - self.fraction)
+        found = 1.0 if inconsistent(_judgements(self.judges, now)) else 0.0
+        self.fraction += elapsed / WINDOW * (found - self.fraction)
         if self.fraction > FRACTION:
             self._suspect_until = now + PROBATION
         self.suspect = now <= self._suspect_until
@@ -215,14 +207,11 @@ def scatter_noise(differences) -> float:
     return statistics.median(differences) / SECOND_DIFFERENCE_MAD
 
 
-def _inconsistent(judges: tuple[AidSource, ...], now: float) -> bool:
-    """True if at least :data:`MIN_SOURCES` recently gated, non-isolated judges (the
-    rangefinders counted as one) disagree with the prediction by more than :data:`SIGMAS`
-    standard deviations, the height sources among them all on one side, and no height
-    source that agrees pins the height tighter than the smallest of their disagreements
-    (a source's resolution, :data:`SIGMAS` standard deviations: a GNSS of 30 m noise cannot
-    tell a 3 m error; a 5 mm laser that agrees with the prediction clears the
-    accelerometer).
+
+def _judgements(judges: tuple[AidSource, ...], now: float) -> Iterator[Judgement]:
+    """The judgements of the prediction
+    (:func:`~altfusion.estimators.prediction_judges.inconsistent`) by the recently gated
+    (within :data:`WINDOW`), non-isolated ``judges``.
 
     A height source judges by the mean ȳ of its innovations over its bias window and that
     mean's variance S̄/n, once the window holds
@@ -230,30 +219,12 @@ def _inconsistent(judges: tuple[AidSource, ...], now: float) -> bool:
     prediction off for seconds: many coarse samples together see what one cannot, a 20 m
     drift under a 20 m baro); the GNSS vertical speed, which has no window, by its last
     innovation and its variance, whatever its sign (a noisy accelerometer's speed error
-    and height error need not share theirs). Compared squared (no square roots)."""
-    sign = 0
-    beyond: set[str] = set()
-    smallest, pinned = math.inf, math.inf             # squared
+    and height error need not share theirs)."""
     for source in judges:
         if now - source.last_gated > WINDOW or source.isolated:
             continue
         window = source.window
         if window.n >= BIAS_MIN_SAMPLES:
-            y, variance = window.mean(), window.mean_variance()
-        elif source.height:
-            continue
-        else:
-            y, variance = source.innovation, max(source.variance, 0.0)
-        bound = SIGMAS * SIGMAS * variance
-        if y * y <= bound:
-            if source.height and bound < pinned:
-                pinned = bound
-            continue
-        beyond.add(RANGE if source.name in RANGE_SOURCES else source.name)
-        if source.height:
-            side = 1 if y > 0.0 else -1
-            if sign and side != sign:
-                return False
-            sign = side
-            smallest = min(smallest, y * y)
-    return len(beyond) >= MIN_SOURCES and pinned >= smallest
+            yield source.name, source.height, window.mean(), window.mean_variance()
+        elif not source.height:
+            yield source.name, False, source.innovation, max(source.variance, 0.0)

@@ -22,7 +22,9 @@ latest one, held):
 
 Without an accelerometer acc_z is taken as 0, so that b_a carries minus the vehicle's
 acceleration: a constant-acceleration model (yang2020's eq. 11 with white jerk), b_a a random
-walk of ``jerk_psd``, plus white acceleration of ``accel_psd`` on (h, v).
+walk of ``jerk_psd``, plus white acceleration of ``accel_psd`` on (h, v); both multiplied
+by a scale raised from 1 while every source finds the prediction off, up to the bound of
+``max_acceleration`` (``adaptive_motion_noise``: :mod:`~altfusion.estimators.process_noise`).
 
 Measurements (one scalar update each, Joseph form, ``kalman.update_scalar``), each at its own
 instant s ≤ now, its time stamp less the sensor's delay (``baro_delay``, ``gps_delay``,
@@ -61,7 +63,9 @@ Deviations from PX4 EKF2 (reasons in docs/altitude_ekf.md):
   rangefinder pins the height (:mod:`~altfusion.estimators.range_aid`; no horizontal-speed
   condition);
 * the barometer's temperature error (whang2008) is the scale-factor state k, not a
-  temperature model: ``baro_p`` and ``baro_T`` are read but not fused.
+  temperature model: ``baro_p`` and ``baro_T`` are read but not fused;
+* without an accelerometer, a motion model whose noise adapts to the innovations
+  (PX4 EKF2 always has its IMU).
 """
 
 import math
@@ -72,6 +76,7 @@ from altfusion.estimators.base import MAX_DELAY, Estimator, HealthParams, Verdic
 from altfusion.estimators.health import NOISE_CHECKED, STEP_BITS, UNKNOWN_STD
 from altfusion.estimators.kalman import quadratic_form, shift_state, update_scalar
 from altfusion.estimators.noise_check import NoiseCheck
+from altfusion.estimators.process_noise import MotionNoise, maximum_scale
 from altfusion.estimators.range_aid import RangeAid
 from altfusion.estimators.streams import ACC, BARO_ALL, GPS_ALL, LASER, RADAR
 from altfusion.params import param
@@ -102,6 +107,14 @@ class AltitudeEKFParams(HealthParams):
     jerk_psd: float = param(0.01, "m2/s5", "PSD of the white jerk driving the motion model's "
                                            "acceleration (state b_a) while no accelerometer is "
                                            "fused (yang2020's jerk_psd)", min=0.0)
+    adaptive_motion_noise: bool = param(True, None, "Raise accel_psd and jerk_psd together "
+                                                    "while every source finds the motion "
+                                                    "model's prediction off (a manoeuvre), "
+                                                    "back to them when it agrees again")
+    max_acceleration: float = param(9.80665, "m/s2", "Largest vertical acceleration of the "
+                                                     "vehicle: the adapted accel_psd stays at "
+                                                     "most max_acceleration² x 1 s (1 g: a "
+                                                     "free fall)", positive=True)
     acc_bias_psd: float = param(1e-5, "m2/s5", "PSD of the accelerometer-bias random walk "
                                                "(PX4 EKF2_ACC_B_NOISE 0.003 m/s³ squared)",
                                 min=0.0)
@@ -225,6 +238,11 @@ class AltitudeEKF(Estimator):
         self._reference_sample = (0.0, 0.0, 1.0)       # its last rejected (z, stamp, σ)
         self._reference_seen = False
         self.n_terrain_resets = 0
+        self.motion_noise = MotionNoise(
+            (*self._heights, self.aid["gps_vz"]), maximum_scale(p.accel_psd,
+                                                                p.max_acceleration),
+            p.gate_sigma) if p.adaptive_motion_noise else None
+        """The motion model's noise adaptation (None: ``adaptive_motion_noise`` off)."""
         self._publish()
 
     # ------------------------------------------------------------------ time update
@@ -264,13 +282,14 @@ class AltitudeEKF(Estimator):
         for row in P:
             row[H], row[V] = row[H] + dt * row[V] - c * row[BA], row[V] - e * row[BA]
         noise = p.acc_noise if self.acc_check is None else self.acc_check.noise
-        q = noise**2 * max(dt, self._acc_period) if acc_on else p.accel_psd
+        scale = 1.0 if self.motion_noise is None else self.motion_noise.scale
+        q = noise**2 * max(dt, self._acc_period) if acc_on else p.accel_psd * scale
         P[H][H] += q * dt**3 / 3.0
         P[H][V] += q * dt**2 / 2.0
         P[V][V] += q * dt
         for i, psd in enumerate(self._q_rw):
             P[i][i] += psd * dt
-        P[BA][BA] += (p.acc_bias_psd if acc_on else p.jerk_psd) * dt
+        P[BA][BA] += (p.acc_bias_psd if acc_on else p.jerk_psd * scale) * dt
         for j in range(N):                                # exact symmetry
             P[j][H], P[j][V] = P[H][j], P[V][j]
         self.x, self.P = x, P
@@ -320,6 +339,7 @@ class AltitudeEKF(Estimator):
                 self.noise_checks[name].forget()
         self._update_range_aid()
         self._ground_constraint()
+        self._adapt_motion_noise()
         self._publish()
 
     def _update_range_aid(self) -> None:
@@ -334,6 +354,17 @@ class AltitudeEKF(Estimator):
             self.note(f"range aid {'started: the terrain held' if aid.active else 'stopped'}")
         if aid.active:
             self._step_flags |= STEP_BITS.RANGE_AID
+
+    def _adapt_motion_noise(self) -> None:
+        """Without an accelerometer, the motion model's noise adapted to this step's
+        innovations (:mod:`~altfusion.estimators.process_noise`) and flagged in ``status``
+        while raised."""
+        adaptation = self.motion_noise
+        if adaptation is None or not self.started or self._acc_used:
+            return
+        adaptation.step(self.time)
+        if adaptation.adapted:
+            self._step_flags |= STEP_BITS.PROCESS_NOISE_ADAPTED
 
     def _ground_constraint(self) -> None:
         """The vehicle cannot be below the ground its rangefinders see, nor sink into it:

@@ -46,9 +46,13 @@ class Status(IntFlag):
     ``max_sample_lead``, further behind than ``max_sample_delay``, or before its stream's
     last sample."""
     BAD_ACC_VERTICAL = 1 << 5
-    """The accelerometer is inconsistent with every height source and its noise inflated
-    more than twofold (PX4 EKF2's ``bad_acc_vertical``;
-    :mod:`~altfusion.estimators.accelerometer_check`)."""
+    """The accelerometer's noise in use is more than twice the stated: measured from its
+    samples' scatter, or inferred from every height source disagreeing with the prediction
+    (PX4 EKF2's ``bad_acc_vertical``; :mod:`~altfusion.estimators.accelerometer_check`)."""
+    PROCESS_NOISE_ADAPTED = 1 << 6
+    """The motion model's process noise is raised more than twofold above the stated one:
+    every source found the prediction off, as in a manoeuvre the stated noise cannot follow
+    (AltitudeEKF without an accelerometer; :mod:`~altfusion.estimators.process_noise`)."""
     RANGE_AID = 1 << 7
     """A rangefinder is used as the height: it is within its height limit and consistent
     with flat terrain, and the terrain under it is held (PX4 EKF2's conditional range aid;
