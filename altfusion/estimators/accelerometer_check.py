@@ -199,6 +199,12 @@ class AccelerometerCheck:
         self.noise = max(self._inflated, measured)
         self.bad = self.noise > BAD * self.stated
 
+    @property
+    def inflation(self) -> float:
+        """(noise / stated)²: the factor on every variance stated for the accelerometer
+        (exactly 1 while it is as stated)."""
+        return (self.noise / self.stated) ** 2
+
 
 def scatter_noise(differences) -> float:
     """The white noise (1σ) of samples whose absolute second differences are

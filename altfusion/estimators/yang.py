@@ -216,7 +216,7 @@ class YangFusionKF(Estimator):
         self._n = 3 + len(walks)
         self._walks = walks
         self._Q = constant_states_noise(white_jerk_noise(dt, p.jerk_psd), walks)
-        self._Q_noise = math.sqrt(p.R_acc)
+        self._Q_inflation = 1.0
         self._height_rows = {name: (*HEIGHT_ROW, *(((OFFSET_STATE[name], 1.0),)
                                                    if OFFSET_STATE.get(name, self._n) < self._n
                                                    else ()))
@@ -239,10 +239,10 @@ class YangFusionKF(Estimator):
         """Eqs. (9)-(11) with the white-jerk process noise (A of eq. 9 is the constant-
         acceleration model, written out in scalar arithmetic)."""
         check = self.acc_check
-        if check is not None and check.noise != self._Q_noise:
-            self._Q_noise = check.noise
-            jerk = self.params.jerk_psd * (check.noise / check.stated) ** 2
-            self._Q = constant_states_noise(white_jerk_noise(dt, jerk), self._walks)
+        if check is not None and check.inflation != self._Q_inflation:
+            self._Q_inflation = check.inflation
+            self._Q = constant_states_noise(
+                white_jerk_noise(dt, self.params.jerk_psd * check.inflation), self._walks)
         self.x, self.P = predict_constant_acceleration(self.x, self.P, dt, self._Q)
 
     def fuse_samples(self, samples) -> None:
@@ -322,7 +322,7 @@ class YangFusionKF(Estimator):
             self.accept(self.aid["acc"])
             check = self.acc_check
             check.sample(acc["acc_z"])
-            R_acc = p.R_acc if check.noise == check.stated else check.noise**2
+            R_acc = p.R_acc * check.inflation
             x, P, _ = update_scalar(x, P, ACC_BIAS_ROW, acc["acc_z"] - x[2] - x[ACC_BIAS],
                                     R_acc)
         self.x, self.P = x, P
