@@ -115,3 +115,43 @@ def test_noise_as_told_is_never_flagged():
     for seed in SEEDS:
         _, _, status = hover(1.0, seed)
         assert not (status & INFLATED).any(), seed
+
+
+@pytest.mark.parametrize("scale", [0.01, 100.0])
+def test_a_noise_not_stated_is_measured_both_ways_and_never_flagged(scale):
+    """No statement: innovations of 0.01x and 100x the typical variance (σ a tenth and
+    tenfold). The factor starts pessimistic, falls by at most FALL per pair, and settles at
+    the true ratio times the upper bound of its two-standard-error interval over the window,
+    1 + 2·√(2/100) = 1.28, within 35 % as above; the source is never flagged and is spared
+    by the fault layer only during its first window of pairs."""
+    source = AidSource("baro")
+    check = NoiseCheck(source, 100.0, 100.0, stated=False)
+    assert check.factor == noise_check.UNSTATED_START
+    noise = np.random.default_rng(5).standard_normal(2000) * np.sqrt(scale)
+    previous = check.factor
+    for k, value in enumerate(noise):
+        check.gated(value, check.factor)
+        assert check.factor >= previous / noise_check.FALL
+        assert source.noisy == (0 < k < 100)
+        previous = check.factor
+        assert not source.bits & source.inflated_mask
+    assert check.factor == pytest.approx(scale * 1.28, rel=0.35)
+
+
+def test_a_stated_noise_is_never_deflated():
+    assert checked(0.01, 2000).factor == 1.0
+
+
+def test_altitude_ekf_told_nothing_is_as_accurate_and_honest_as_told_the_noise():
+    """The hover with no noise stated (every ``<source>_noise`` 0: measured from typical
+    starting values 4-35x off the sensors': baro 2 m for 0.5, GNSS 3 m for 0.3, laser 0.1 m
+    for 0.01, accelerometer 0.35 for 0.05 m/s²) against the same runs told the noise: seeds
+    1-5 measured coverage 0.79-1.00 (0.96 together) and RMS 0.013-0.032 m, told 0.59-1.00
+    and 0.012-0.034 m. Issue 29's targets: coverage at least 0.85 over the seeds together,
+    RMS at most twice the told-noise RMS."""
+    told_nothing = [hover(0.0, seed) for seed in range(1, 6)]
+    told = [hover(1.0, seed) for seed in range(1, 6)]
+    coverage = np.mean([np.abs(e) <= 2.0 * s for e, s, _ in told_nothing])
+    assert coverage >= 0.85
+    rms = np.sqrt(np.mean([e**2 for e, _, _ in told_nothing]))
+    assert rms <= 2.0 * np.sqrt(np.mean([e**2 for e, _, _ in told]))

@@ -54,6 +54,12 @@ height sources are independent of each other) and the inflation follows the evid
 40x noisier accelerometer needs 2 m/s², a 10 m/s² one twice PX4's level). PX4 measures the
 IMU's vibration (``accel_vibration_metric``) but does not use it in the filter; here the
 scatter sets the noise.
+
+An accelerometer whose noise was *not stated* (the estimator starts from a small UAV's
+typical value) is measured both ways: once :data:`SCATTER_SAMPLES` are in, its scatter is the
+noise the estimator uses (within
+:data:`~altfusion.estimators.noise_check.UNSTATED_RANGE` below the starting value, up to the
+clipping level), and the height sources' evidence inflates it from there.
 """
 
 import math
@@ -63,6 +69,7 @@ from collections.abc import Iterator
 
 from altfusion.estimators.aid_source import AidSource
 from altfusion.estimators.fault_detection import BIAS_MIN_SAMPLES
+from altfusion.estimators.noise_check import UNSTATED_RANGE
 from altfusion.estimators.prediction_judges import Judgement, inconsistent
 from altfusion.estimators.streams import ACC_CLIP
 
@@ -129,16 +136,22 @@ class AccelerometerCheck:
     """The ``bad_acc_vertical`` condition of one estimator's accelerometer, and the noise to
     use for it (:attr:`noise`): its stated noise while good."""
 
-    __slots__ = ("judges", "stated", "noise", "bad", "suspect", "fraction", "scatter",
-                 "_inflated", "_suspect_until", "_escalated", "_last", "_decay", "_decay_dt",
-                 "_differences", "_last_samples")
+    __slots__ = ("judges", "stated", "measured", "floor", "noise", "bad", "suspect",
+                 "fraction", "scatter", "_inflated", "_suspect_until", "_escalated", "_last",
+                 "_decay", "_decay_dt", "_differences", "_last_samples")
 
-    def __init__(self, stated_noise: float, judges: tuple[AidSource, ...]) -> None:
+    def __init__(self, stated_noise: float, judges: tuple[AidSource, ...],
+                 stated: bool = True) -> None:
         self.judges = judges
         """The aid sources that judge the prediction: the height sources and the GNSS
         vertical speed (none: only the scatter is checked)."""
         self.stated = stated_noise
-        """The accelerometer's stated noise, 1σ (m/s² per sample)."""
+        """The accelerometer's stated noise, 1σ (m/s² per sample); not stated: its
+        starting value, then its scatter."""
+        self.measured = not stated
+        """The noise was not stated: :attr:`stated` follows the scatter."""
+        self.floor = stated_noise / UNSTATED_RANGE
+        """The smallest noise a scatter sets when none was stated."""
         self.noise = stated_noise
         """The noise the estimator uses: the stated one, inflated while found too small."""
         self.bad = False
@@ -185,6 +198,12 @@ class AccelerometerCheck:
         if self.fraction > FRACTION:
             self._suspect_until = now + PROBATION
         self.suspect = now <= self._suspect_until
+        if len(self._differences) == SCATTER_SAMPLES:
+            self.scatter = scatter_noise(self._differences)
+            if self.measured:                       # the typical start is no evidence
+                first = self.stated == self._inflated == self.noise
+                self.stated = min(max(self.scatter, self.floor), ACC_CLIP)
+                self._inflated = self.stated if first else max(self._inflated, self.stated)
         if self.fraction > FRACTION and now - self._escalated >= ESCALATION:
             self._inflated, self._escalated = min(GROWTH * self.noise, ACC_CLIP), now
         elif self._inflated != self.stated:
@@ -193,8 +212,6 @@ class AccelerometerCheck:
             self._inflated = self.stated + self._decay * (self._inflated - self.stated)
             if self._inflated < self.stated * (1.0 + 1e-6):
                 self._inflated = self.stated
-        if len(self._differences) == SCATTER_SAMPLES:
-            self.scatter = scatter_noise(self._differences)
         measured = min(self.scatter, ACC_CLIP) if self.scatter > MARGIN * self.stated else 0.0
         self.noise = max(self._inflated, measured)
         self.bad = self.noise > BAD * self.stated
@@ -211,7 +228,6 @@ def scatter_noise(differences) -> float:
     ``differences``: their median over :data:`SECOND_DIFFERENCE_MAD` (the median absolute
     deviation's estimate of σ, robust to the few large differences of a manoeuvre)."""
     return statistics.median(differences) / SECOND_DIFFERENCE_MAD
-
 
 
 def _judgements(judges: tuple[AidSource, ...], now: float) -> Iterator[Judgement]:

@@ -57,7 +57,12 @@ Deviations from PX4 EKF2 (reasons in docs/altitude_ekf.md):
 * each source's noise checked against its innovations (``adaptive_noise``, on by default):
   its R inflated, within [1, ``adaptive_max``], while the scatter of its innovations shows
   it too small (xu2016's bounded adaptation, on innovation differences:
-  :mod:`~altfusion.estimators.noise_check`); EKF2 has none;
+  :mod:`~altfusion.estimators.noise_check`); EKF2 has none. A noise not stated (its
+  ``<source>_noise`` 0, the default) is measured instead, both ways, from
+  :data:`TYPICAL_NOISE` (EKF2 uses its default noises as they are);
+* a terrain reset takes the height's error and the sample's noise (EKF2's
+  ``resetTerrainToRng`` sets the range noise alone, right against its local origin, not
+  against a GNSS datum);
 * PX4's conditional range aid (``range_aid``): below ``range_aid_max_height`` and while the
   rangefinders are consistent with flat terrain the terrain state is held, so the
   rangefinder pins the height (:mod:`~altfusion.estimators.range_aid`; no horizontal-speed
@@ -87,20 +92,31 @@ N = 7
 
 HEIGHT_REFERENCES = ("gps", "baro", "range")
 
+TYPICAL_NOISE = {"baro": 2.0, "gps": 3.0, "gps_vz": 0.5, "acc": 0.35, "radar": 1.0,
+                 "laser": 0.1}
+"""A small UAV's sensor noises (1σ, SI units; PX4 EKF2's defaults where it has one): where
+each source's noise starts when the user states none (its ``<source>_noise`` at 0); the noise
+check then measures it (:mod:`~altfusion.estimators.noise_check`)."""
+
 
 @dataclass(frozen=True)
 class AltitudeEKFParams(HealthParams):
-    baro_noise: float = param(2.0, "m", "Baro height noise, 1σ", positive=True)
-    gps_noise: float = param(3.0, "m", "GNSS height noise at VDOP 1 with enough satellites, "
-                                       "1σ (the user range error)", positive=True)
-    gps_vz_noise: float = param(0.5, "m/s", "GNSS vertical-speed noise, 1σ (PX4 "
-                                            "EKF2_GPS_V_NOISE)", positive=True)
-    acc_noise: float = param(0.35, "m/s2", "Accelerometer noise per sample, 1σ (PX4 "
-                                           "EKF2_ACC_NOISE)",
-                             positive=True)
-    radar_noise: float = param(1.0, "m", "Radio-altimeter noise, 1σ", positive=True)
-    laser_noise: float = param(0.1, "m", "Laser-rangefinder noise, 1σ (PX4 EKF2_RNG_NOISE)",
-                               positive=True)
+    baro_noise: float = param(0.0, "m", "Baro height noise, 1σ (0: not stated: measured "
+                                        "from the data, starting at 2 m)", min=0.0)
+    gps_noise: float = param(0.0, "m", "GNSS height noise at VDOP 1 with enough satellites, "
+                                       "1σ, the user range error (0: not stated: measured, "
+                                       "starting at 3 m)", min=0.0)
+    gps_vz_noise: float = param(0.0, "m/s", "GNSS vertical-speed noise, 1σ (0: not stated: "
+                                            "measured, starting at PX4 EKF2_GPS_V_NOISE's "
+                                            "0.5 m/s)", min=0.0)
+    acc_noise: float = param(0.0, "m/s2", "Accelerometer noise per sample, 1σ (0: not "
+                                          "stated: measured from its scatter, starting at "
+                                          "PX4 EKF2_ACC_NOISE's 0.35 m/s2)", min=0.0)
+    radar_noise: float = param(0.0, "m", "Radio-altimeter noise, 1σ (0: not stated: "
+                                         "measured, starting at 1 m)", min=0.0)
+    laser_noise: float = param(0.0, "m", "Laser-rangefinder noise, 1σ (0: not stated: "
+                                         "measured, starting at PX4 EKF2_RNG_NOISE's 0.1 m)",
+                               min=0.0)
     accel_psd: float = param(0.01, "m2/s3", "PSD of the white vertical acceleration added "
                                             "to the motion model while no accelerometer is "
                                             "fused", positive=True)
@@ -202,6 +218,12 @@ class AltitudeEKF(Estimator):
         if p.height_ref not in HEIGHT_REFERENCES:
             raise ParameterError("height_ref", p.height_ref,
                                  f"must be one of {', '.join(HEIGHT_REFERENCES)}")
+        stated = {source: getattr(p, f"{source}_noise") for source in TYPICAL_NOISE}
+        self.sensor_noise = {source: value or TYPICAL_NOISE[source]
+                      for source, value in stated.items()}
+        """Each source's noise, 1σ: the stated one, or the typical one where none is."""
+        self.noise_stated = {source: value > 0.0 for source, value in stated.items()}
+        """Whether the user stated each source's noise (else it is measured)."""
 
     def initialize_filter(self) -> None:
         p = self.params
@@ -226,7 +248,7 @@ class AltitudeEKF(Estimator):
         self._range_on = {"radar": True, "laser": True}
         self._range_rejected_since: dict[str, float] = {}
         self.noise_checks = {name: NoiseCheck(self.aid[name], p.adaptive_window,
-                                              p.adaptive_max)
+                                              p.adaptive_max, self.noise_stated[name])
                              for name in NOISE_CHECKED if p.adaptive_noise}
         """Each checked source's noise check (none without ``adaptive_noise``)."""
         self.range_aid = RangeAid((self.aid["radar"], self.aid["laser"]), self._heights,
@@ -281,7 +303,7 @@ class AltitudeEKF(Estimator):
         P[V] = [p1 - e * p2 for p1, p2 in zip(P[V], P[BA], strict=True)]
         for row in P:
             row[H], row[V] = row[H] + dt * row[V] - c * row[BA], row[V] - e * row[BA]
-        noise = p.acc_noise if self.acc_check is None else self.acc_check.noise
+        noise = self.sensor_noise["acc"] if self.acc_check is None else self.acc_check.noise
         scale = 1.0 if self.motion_noise is None else self.motion_noise.scale
         q = noise**2 * max(dt, self._acc_period) if acc_on else p.accel_psd * scale
         P[H][H] += q * dt**3 / 3.0
@@ -295,9 +317,12 @@ class AltitudeEKF(Estimator):
         self.x, self.P = x, P
 
     def accelerometer_noise(self) -> float:
-        """``acc_noise``: checked, and inflated while found bad, with ``fault_detection``
-        (:mod:`~altfusion.estimators.accelerometer_check`)."""
-        return self.params.acc_noise
+        """``acc_noise`` (or the typical one): checked, and inflated while found bad, with
+        ``fault_detection`` (:mod:`~altfusion.estimators.accelerometer_check`)."""
+        return self.sensor_noise["acc"]
+
+    def accelerometer_noise_stated(self) -> bool:
+        return self.noise_stated["acc"]
 
     def _switch_acceleration(self, acc_on: bool) -> None:
         """The accelerometer came or went: b_a changes meaning (its bias, or minus the
@@ -323,9 +348,9 @@ class AltitudeEKF(Estimator):
         baro = samples.get(BARO_ALL)
         if baro is not None:
             self._fuse_height("baro", baro["baro_h"], baro["baro_time"] - self.params.baro_delay,
-                              self.params.baro_noise)
-        for name, stream, sigma in (("radar", RADAR, self.params.radar_noise),
-                                    ("laser", LASER, self.params.laser_noise)):
+                              self.sensor_noise["baro"])
+        for name, stream, sigma in (("radar", RADAR, self.sensor_noise["radar"]),
+                                    ("laser", LASER, self.sensor_noise["laser"])):
             sample = samples.get(stream)
             if sample is None:
                 continue
@@ -394,10 +419,10 @@ class AltitudeEKF(Estimator):
         not given: factor 1)."""
         p = self.params
         if not p.gps_dop_scaling:
-            return p.gps_noise
+            return self.sensor_noise["gps"]
         vdop = sample["gps_vdop"] / p.gps_vdop_ref if sample["gps_vdop"] > 0.0 else 1.0
         nsat = sample["gps_nsat"]
-        return p.gps_noise * vdop * math.sqrt(max(1.0, p.gps_nsat_ref / nsat)
+        return self.sensor_noise["gps"] * vdop * math.sqrt(max(1.0, p.gps_nsat_ref / nsat)
                                               if nsat > 0 else 1.0)
 
     def _range_in_use(self, name: str, reading: float) -> bool:
@@ -448,7 +473,7 @@ class AltitudeEKF(Estimator):
         if source == "baro":
             y = self._ground_effect(y)
         S = quadratic_form(self.P, row) + R
-        if source in ("radar", "laser") and self._terrain_step(source, z, y, S):
+        if source in ("radar", "laser") and self._terrain_step(source, y, S, row_h, R):
             return
         if source == self._reference:
             if self._reference_step(source, y, S):
@@ -469,7 +494,7 @@ class AltitudeEKF(Estimator):
         row = [(V, 1.0)]
         if delta > 0.0:
             row.append((BA, delta))
-        R = self.params.gps_vz_noise ** 2 * self._adaptation("gps_vz")
+        R = self.sensor_noise["gps_vz"] ** 2 * self._adaptation("gps_vz")
         y = vz - v_s
         S = self.P[V][V] + (2.0 * delta * self.P[V][BA] + delta * delta * self.P[BA][BA]
                             if len(row) > 1 else 0.0) + R
@@ -486,10 +511,18 @@ class AltitudeEKF(Estimator):
             return min(0.0, y + p.ground_effect_deadzone)
         return y
 
-    def _terrain_step(self, source: str, z: float, y: float, S: float) -> bool:
+    def _terrain_step(self, source: str, y: float, S: float, row_h, R: float) -> bool:
         """Range consistency: a rangefinder rejected for ``reset_timeout`` while the height is
         aided by others has seen the terrain change (a step, a box): the terrain resets
-        onto it (counted in ``n_terrain_resets``). True if it did."""
+        onto it, t = h(s) - z (counted in ``n_terrain_resets``). True if it did.
+
+        With ``height_ref`` range the terrain is the datum (variance 0). Otherwise t takes
+        the height's error and the sample's noise: Var(t) = row_h P row_hᵀ + R and
+        Cov(t, x) = row_h P, the covariance of the reset (PX4 EKF2's ``resetTerrainToRng``
+        sets the range noise and no correlations, right for its local frame's origin but,
+        against a GNSS datum, a terrain as precise as the range while the height is known to
+        metres: measured, a 5 mm laser's reset left ``h_std`` 0.14 m with the height 2.4 m
+        off)."""
         p = self.params
         if p.gate_sigma <= 0.0 or y * y <= p.gate_sigma**2 * S:
             return False
@@ -498,9 +531,15 @@ class AltitudeEKF(Estimator):
             return False
         self._range_rejected_since.pop(source)
         self.x[T] -= y
-        self.P = [[0.0 if (i == T) != (j == T) else pij for j, pij in enumerate(row)]
-                  for i, row in enumerate(self.P)]
-        self.P[T][T] = 0.0 if p.height_ref == "range" else S
+        if p.height_ref == "range":
+            self.P = [[0.0 if (i == T) or (j == T) else pij for j, pij in enumerate(row)]
+                      for i, row in enumerate(self.P)]
+        else:
+            P = self.P
+            cross = [sum(c * P[i][j] for i, c in row_h) for j in range(N)]
+            for j in range(N):
+                P[T][j] = P[j][T] = cross[j]
+            P[T][T] = quadratic_form(P, row_h) + R
         self.n_terrain_resets += 1
         for name, check in self.noise_checks.items():   # both rangefinders' predictions
             if name in ("radar", "laser"):

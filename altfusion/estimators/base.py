@@ -161,7 +161,8 @@ class Estimator(SampleIntake, Gating, Component):
         noise = self.accelerometer_noise()
         judges = (*self._heights, *(s for s in self.aid_sources if s.name == "gps_vz")) \
             if self.acc_drives_prediction else ()
-        self.acc_check = AccelerometerCheck(noise, judges) if (
+        self.acc_check = AccelerometerCheck(
+            noise, judges, self.accelerometer_noise_stated()) if (
             noise is not None and self.params.fault_detection) else None
         """PX4's bad_acc_vertical check of the accelerometer (fault layer; None without)."""
         self.initialize_filter()
@@ -186,6 +187,11 @@ class Estimator(SampleIntake, Gating, Component):
         uses one (its noise is then checked and inflated while found bad:
         :mod:`~altfusion.estimators.accelerometer_check`); None (the default): none."""
         return None
+
+    def accelerometer_noise_stated(self) -> bool:
+        """The user stated :meth:`accelerometer_noise` (True, the default); False: it is a
+        typical starting value, and the check measures the noise both ways."""
+        return True
 
     def reset_offset(self, source: str, innovation: float, variance: float) -> bool:
         """Move the offset state of height source ``source`` by ``innovation`` onto a sample

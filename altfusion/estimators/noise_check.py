@@ -42,6 +42,27 @@ Deviations from xu2016 (which uses the mean of y²/S itself):
 * the flag waits for :data:`MIN_PAIRS` pairs;
 * a source whose noise is found well above the stated (:data:`NOISY`) is neither isolated
   nor rejected by the bias test of the fault layer (a biased source told right is).
+
+A noise *not stated* (the user told none: the estimator has a small UAV's typical value) is
+measured instead of checked, within [1/:data:`UNSTATED_RANGE`², :data:`UNSTATED_RANGE`²] of
+the typical value:
+
+* it starts pessimistic, at :data:`UNSTATED_START` times the typical variance: a sensor far
+  noisier than typical would otherwise have its first samples taken as precise, and they
+  would weigh in the estimate for minutes (measured: a 30 m GNSS started at 3 m kept the
+  height 15 m off after 10 s, 6 m after 40 s);
+* the factor in use is the upper bound of m's two-standard-error confidence interval,
+  m·(1 + 2·√(2/min(n, window))) (m averages about min(n, window) χ² ratios of one degree),
+  and falls by at most :data:`FALL` per pair: a noise known from a few pairs only is not
+  yet trusted to be small (the first pair's ratio is below a tenth of the true one once in
+  four);
+* it is never flagged (there is no statement to be wrong), and it is ``noisy`` (spared by
+  the fault layer) only until its first ``window`` pairs are in: until then its gate and
+  bias test are not yet sized by its noise.
+
+A stated noise is never deflated: a sensor whose errors are correlated in time (a GNSS)
+scatters less from sample to sample than its datasheet's σ, which is the honest figure for
+the filter.
 """
 
 import math
@@ -76,20 +97,39 @@ exceeds 4 with the probability of χ² with 20 degrees of freedom beyond 80, 10�
 first pairs alone would flag a source as told once in 22: χ² with one degree beyond 4)."""
 
 
+UNSTATED_RANGE = 100.0
+"""A noise not stated is learnt within this factor either way of its typical value (σ; its
+variance within the square): from a small UAV's typical sensors to the 20-70 m baro and GNSS
+of a paper's aircraft, and down to a 5 mm laser."""
+
+UNSTATED_START = 100.0
+"""A noise not stated starts at this factor on its typical variance (σ tenfold)."""
+
+FALL = 4.0
+"""The factor of a noise not stated falls by at most this ratio per pair."""
+
+
 class NoiseCheck:
     """The noise factor of one source: :attr:`factor` multiplies its stated variance R."""
 
-    __slots__ = ("source", "window", "maximum", "ratio", "factor", "pairs", "_last")
+    __slots__ = ("source", "window", "maximum", "minimum", "stated", "ratio", "factor",
+                 "pairs", "_last")
 
-    def __init__(self, source: AidSource, window: float, maximum: float) -> None:
+    def __init__(self, source: AidSource, window: float, maximum: float,
+                 stated: bool = True) -> None:
         self.source = source
         self.window = window
         """Pairs in the exponential window of the ratio's average."""
-        self.maximum = maximum
+        self.stated = stated
+        """The user stated the noise (checked: never deflated); False: it is measured, from
+        a typical starting value, within :data:`UNSTATED_RANGE` either way."""
+        self.maximum = maximum if stated else UNSTATED_RANGE**2
         """Largest factor on the variance."""
+        self.minimum = 1.0 if stated else UNSTATED_RANGE**-2
+        """Smallest factor on the variance."""
         self.ratio = 1.0
         """m: the windowed estimate of the true noise variance over the stated one."""
-        self.factor = 1.0
+        self.factor = 1.0 if stated else UNSTATED_START
         """f: the factor on the stated variance in use."""
         self.pairs = 0
         """n: the pairs of innovations taken so far."""
@@ -109,10 +149,16 @@ class NoiseCheck:
         difference = innovation - last[0]
         pair = min(difference * difference / total, CLIP)
         self.pairs += 1
-        self.ratio += (pair * self.factor - self.ratio) / min(self.pairs, self.window)
-        self.factor = min(max(self.ratio, 1.0), self.maximum)
-        self.source.mark_inflated(self.factor > FLAGGED and self.pairs >= MIN_PAIRS)
-        self.source.noisy = self.ratio > NOISY
+        averaged = min(self.pairs, self.window)
+        self.ratio += (pair * self.factor - self.ratio) / averaged
+        if self.stated:
+            self.factor = min(max(self.ratio, 1.0), self.maximum)
+            self.source.mark_inflated(self.factor > FLAGGED and self.pairs >= MIN_PAIRS)
+            self.source.noisy = self.ratio > NOISY
+        else:
+            bound = self.ratio * (1.0 + 2.0 * math.sqrt(2.0 / averaged))
+            self.factor = min(max(bound, self.factor / FALL, self.minimum), self.maximum)
+            self.source.noisy = self.pairs < self.window
 
     def forget(self) -> None:
         """The next sample starts a new pair (after a reset, a re-referencing or a gap)."""
