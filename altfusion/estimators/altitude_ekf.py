@@ -84,6 +84,7 @@ from altfusion.estimators.noise_check import NoiseCheck
 from altfusion.estimators.process_noise import MotionNoise, maximum_scale
 from altfusion.estimators.range_aid import RangeAid
 from altfusion.estimators.streams import ACC, BARO_ALL, GPS_ALL, LASER, RADAR
+from altfusion.estimators.stuck import StuckCheck
 from altfusion.params import param
 
 H, V, BA, D, K, T, G = range(7)
@@ -138,8 +139,10 @@ class AltitudeEKFParams(HealthParams):
                                                "(height_ref gps or range)", min=0.0)
     gps_bias_psd: float = param(0.01, "m2/s", "PSD of the random walk of the GNSS offset g "
                                               "(height_ref baro or range)", min=0.0)
-    baro_scale_psd: float = param(1e-9, "1/s", "PSD of the random walk of the baro scale "
-                                               "factor k", min=0.0)
+    baro_scale_psd: float = param(1e-6, "1/s", "PSD of the random walk of the baro scale "
+                                               "factor k (1e-6: about 1 % per 100 s, the "
+                                               "temperature and lapse-rate error of an "
+                                               "unknown baro)", min=0.0)
     terrain_psd: float = param(0.01, "m2/s", "PSD of the terrain-height random walk",
                                min=0.0)
     gps_dop_scaling: bool = param(True, None, "Scale the GNSS height noise by VDOP and the "
@@ -182,6 +185,10 @@ class AltitudeEKFParams(HealthParams):
     range_aid_max_height: float = param(25.0, "m", "The range aid stops above this range "
                                                    "(PX4 EKF2_RNG_A_HMAX; xu2016's 25 m)",
                                         positive=True)
+    stuck_samples: int = param(10, None, "A reading repeated bit for bit this many times in "
+                                         "a row (a frozen sensor, an unconnected input) is "
+                                         "not fused until it changes, with fault_detection "
+                                         "(0: off)", min=0)
     acc_timeout: float = param(0.5, "s", "Without an accelerometer sample for this long the "
                                          "motion model takes over", positive=True)
     baro_delay: float = param(0.0, "s", "Time from a baro measurement to its stamp: the "
@@ -251,6 +258,9 @@ class AltitudeEKF(Estimator):
                                               p.adaptive_max, self.noise_stated[name])
                              for name in NOISE_CHECKED if p.adaptive_noise}
         """Each checked source's noise check (none without ``adaptive_noise``)."""
+        self.stuck_checks = {name: StuckCheck(p.stuck_samples) for name in self.aid} \
+            if p.fault_detection and p.stuck_samples > 0 else {}
+        """Each source's check for a stuck reading (none without the fault layer)."""
         self.range_aid = RangeAid((self.aid["radar"], self.aid["laser"]), self._heights,
                                   p.range_aid_max_height, p.range_hysteresis) \
             if p.range_aid else None
@@ -336,23 +346,27 @@ class AltitudeEKF(Estimator):
 
     # ------------------------------------------------------------------ measurements
     def fuse_samples(self, samples) -> None:
-        self._predict(samples.get(ACC))
-        if ACC in samples:
+        acc = samples.get(ACC)
+        if acc is not None and self._stuck("acc", acc["acc_z"]):
+            acc = None
+        self._predict(acc)
+        if acc is not None:
             self.accept(self.aid["acc"])
         gps = samples.get(GPS_ALL)
         if gps is not None:
             instant = gps["gps_time"] - self.params.gps_delay
-            self._fuse_height("gps", gps["gps_h"], instant, self._gps_sigma(gps))
-            if self.started:
+            if not self._stuck("gps", gps["gps_h"]):
+                self._fuse_height("gps", gps["gps_h"], instant, self._gps_sigma(gps))
+            if self.started and not self._stuck("gps_vz", gps["gps_vz"]):
                 self._fuse_speed(gps["gps_vz"], instant)
         baro = samples.get(BARO_ALL)
-        if baro is not None:
+        if baro is not None and not self._stuck("baro", baro["baro_h"]):
             self._fuse_height("baro", baro["baro_h"], baro["baro_time"] - self.params.baro_delay,
                               self.sensor_noise["baro"])
         for name, stream, sigma in (("radar", RADAR, self.sensor_noise["radar"]),
                                     ("laser", LASER, self.sensor_noise["laser"])):
             sample = samples.get(stream)
-            if sample is None:
+            if sample is None or self._stuck(name, sample[f"{name}_h"]):
                 continue
             reading, stamp = sample[f"{name}_h"], sample[f"{name}_time"] - self.params.range_delay
             if self.range_aid is not None and self.started:
@@ -366,6 +380,23 @@ class AltitudeEKF(Estimator):
         self._ground_constraint()
         self._adapt_motion_noise()
         self._publish()
+
+    def _stuck(self, source: str, reading: float) -> bool:
+        """``source``'s reading is stuck (:mod:`~altfusion.estimators.stuck`): refused
+        (counted), its noise check's pair broken; when it sticks, isolated (a failed sensor,
+        until a changed reading passes its gate) and noted."""
+        check = self.stuck_checks.get(source)
+        if check is None or not check.stuck(reading):
+            return False
+        aid = self.aid[source]
+        if check.repeats == check.limit:
+            aid.isolate()
+            self.note(f"{source}: the same reading {reading:.6g} {check.limit + 1} times in a row: "
+                      f"stuck, isolated until it changes and passes its gate")
+        aid.refused()
+        if source in self.noise_checks:
+            self.noise_checks[source].forget()
+        return True
 
     def _update_range_aid(self) -> None:
         """The conditional range aid decided for this step: the terrain held while it is
