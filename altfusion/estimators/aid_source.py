@@ -43,11 +43,12 @@ class InnovationWindow:
         """Add the sample (y, S) of time ``now`` and drop those older than ``span``."""
         y = min(max(y, -MAX_WINDOW_VALUE), MAX_WINDOW_VALUE)
         S = min(max(S, 0.0), MAX_WINDOW_VALUE)
-        self.samples.append((now, y, S))
+        samples = self.samples
+        samples.append((now, y, S))
         self.sum_y += y
         self.sum_S += S
-        while now - self.samples[0][0] > span:
-            _, old_y, old_S = self.samples.popleft()
+        while now - samples[0][0] > span:
+            _, old_y, old_S = samples.popleft()
             self.sum_y -= old_y
             self.sum_S -= old_S
 
@@ -58,10 +59,11 @@ class InnovationWindow:
         self.sigmas = math.inf
 
     def mean(self) -> float:
-        return self.sum_y / self.n
+        return self.sum_y / len(self.samples)
 
     def mean_variance(self) -> float:
-        return max(self.sum_S, 0.0) / (self.n * self.n)
+        n = len(self.samples)
+        return max(self.sum_S, 0.0) / (n * n)
 
     def one_sided(self, min_samples: int) -> bool:
         """True if the window holds ``min_samples`` or more innovations, all of one sign (a

@@ -248,7 +248,7 @@ class YangFusionKF(Estimator):
     def fuse_samples(self, samples) -> None:
         """Gate and store the new heights, fuse them at a benchmark sample (eqs. 5-8), then
         one Kalman update (eqs. 12-14; also publishes the time update of :meth:`propagate`)."""
-        now, p = self.time, self.params
+        now, p = self.clock.now, self.params
         arrived = self._new_heights(samples, now)
         benchmark = self._benchmark(now)
         heights = None
@@ -391,9 +391,9 @@ class YangFusionKF(Estimator):
 
     def _benchmark(self, now: float) -> str | None:
         """The first live height sensor in order of decreasing sampling period (Section 4.2)."""
-        for name in HEIGHT_SENSORS:
-            history = self.history[name]
-            if history and history[-1][0] >= now - self.params.max_sample_age:
+        oldest = now - self.params.max_sample_age
+        for name, history in self.history.items():                  # in HEIGHT_SENSORS order
+            if history and history[-1][0] >= oldest:
                 return name
         return None
 
