@@ -253,7 +253,8 @@ class AltitudeEKF(Estimator):
     def _predict(self, acc_sample) -> None:
         """x⁺ = F x + B a, P⁺ = F P Fᵀ + Q over one step (written out: F differs from I in
         the rows of h and v only)."""
-        dt, now, p = self.dt, self.time, self.params
+        clock, p = self.clock, self.params
+        dt, now = clock.step_size, clock.now
         previous = self._acc
         if acc_sample is not None:
             self._acc = (acc_sample["acc_time"], acc_sample["acc_z"])
@@ -272,14 +273,16 @@ class AltitudeEKF(Estimator):
         self._acc_used = acc_on
         if not self.started:
             return
-        x, P = self.x, [row[:] for row in self.P]
+        x, P = self.x, list(map(list.copy, self.P))
         c = 0.5 * dt * dt                                 # ∂h⁺/∂(-b_a)
         e = dt                                            # ∂v⁺/∂(-b_a)
         a = a_in - x[BA]
         x = [x[H] + dt * x[V] + 0.5 * dt * dt * a, x[V] + dt * a, *x[2:]]
-        P[H] = [p0 + dt * p1 - c * p2 for p0, p1, p2 in zip(P[H], P[V], P[BA], strict=True)]
-        P[V] = [p1 - e * p2 for p1, p2 in zip(P[V], P[BA], strict=True)]
-        for row in P:
+        P[H] = [p0 + dt * p1 - c * p2 for p0, p1, p2 in zip(P[H], P[V], P[BA])]  # noqa: B905
+        P[V] = [p1 - e * p2 for p1, p2 in zip(P[V], P[BA])]     # noqa: B905 (a keyword call)
+        # (F P) Fᵀ in columns h and v of rows h and v; the other rows take theirs from rows h
+        # and v in the symmetry loop below (computing them here too would be overwritten)
+        for row in (P[H], P[V]):
             row[H], row[V] = row[H] + dt * row[V] - c * row[BA], row[V] - e * row[BA]
         noise = p.acc_noise if self.acc_check is None else self.acc_check.noise
         scale = 1.0 if self.motion_noise is None else self.motion_noise.scale
@@ -348,7 +351,7 @@ class AltitudeEKF(Estimator):
         aid = self.range_aid
         if aid is None or not self.started:
             return
-        if aid.update(self.time):
+        if aid.update(self.clock.now):
             walk = 0.0 if self.params.height_ref == "range" else self.params.terrain_psd
             self._q_rw[T] = 0.0 if aid.active else walk
             self.note(f"range aid {'started: the terrain held' if aid.active else 'stopped'}")
@@ -414,7 +417,7 @@ class AltitudeEKF(Estimator):
     def _back(self, stamp: float) -> tuple[float, float, list[tuple[int, float]], float]:
         """The state taken back to ``stamp``: h(s), v(s), the Jacobian row of h(s) on the
         present state, and δ (≥ 0: a sample is never fused before its stamp)."""
-        delta = max(0.0, self.time - stamp)
+        delta = max(0.0, self.clock.now - stamp)
         x = self.x
         if delta == 0.0:
             return x[H], x[V], [(H, 1.0)], 0.0

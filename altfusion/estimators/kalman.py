@@ -226,7 +226,14 @@ def update_state_component(x: Vector, P: Matrix, index: int, z: float, variance:
 def quadratic_form(P: Matrix, H: Sequence[tuple[int, float]]) -> float:
     """H P Hᵀ for a sparse row H ((state index, coefficient) pairs): the variance of the
     measured combination of states, the innovation variance without R."""
-    return sparse_dot({i: sparse_dot(P[i], H) for i, _ in H}, H)
+    total = 0.0                           # H (P Hᵀ), each sum from 0 in H's order, as
+    for i, h in H:                        # sparse_dot of sparse_dot gives them
+        P_i = P[i]
+        inner = 0.0
+        for j, c in H:
+            inner += c * P_i[j]
+        total += h * inner
+    return total
 
 
 def update_scalar(x: Vector, P: Matrix, H: Sequence[tuple[int, float]], innovation: float,
