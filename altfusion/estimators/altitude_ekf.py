@@ -85,6 +85,9 @@ H, V, BA, D, K, T, G = range(7)
 N = 7
 """Indices and size of the state vector [h, v, b_a, d, k, t, g]."""
 
+RANGEFINDERS = (("radar", RADAR), ("laser", LASER))
+"""The rangefinders and their streams, in the order their samples are fused."""
+
 HEIGHT_REFERENCES = ("gps", "baro", "range")
 
 
@@ -327,12 +330,12 @@ class AltitudeEKF(Estimator):
         if baro is not None:
             self._fuse_height("baro", baro["baro_h"], baro["baro_time"] - self.params.baro_delay,
                               self.params.baro_noise)
-        for name, stream, sigma in (("radar", RADAR, self.params.radar_noise),
-                                    ("laser", LASER, self.params.laser_noise)):
+        for name, stream in RANGEFINDERS:
             sample = samples.get(stream)
             if sample is None:
                 continue
-            reading, stamp = sample[f"{name}_h"], sample[f"{name}_time"] - self.params.range_delay
+            sigma = self.params.laser_noise if name == "laser" else self.params.radar_noise
+            reading, stamp = sample[stream.values[0]], sample[stream.time] - self.params.range_delay
             if self.range_aid is not None and self.started:
                 self.range_aid.sample(name, stamp, reading, sigma * sigma, self.x[V],
                                       self.P[V][V])
