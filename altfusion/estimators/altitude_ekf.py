@@ -72,6 +72,7 @@ import math
 from dataclasses import dataclass
 
 from altfusion.errors import ParameterError
+from altfusion.estimators.aid_source import FUSED
 from altfusion.estimators.base import MAX_DELAY, Estimator, HealthParams, Verdict
 from altfusion.estimators.health import NOISE_CHECKED, STEP_BITS, UNKNOWN_STD
 from altfusion.estimators.kalman import quadratic_form, shift_state, update_scalar
@@ -575,7 +576,7 @@ class AltitudeEKF(Estimator):
                 check.gated(y, S)
             else:
                 check.forget()
-        return verdict is Verdict.FUSED
+        return verdict is FUSED
 
     # ------------------------------------------------------------------ start and resets
     def _offset_index(self, source: str) -> int | None:

@@ -9,7 +9,7 @@ source that stays rejected while another pins the height.
 import math
 
 from altfusion.estimators import fault_detection as faults
-from altfusion.estimators.aid_source import AidSource, Verdict
+from altfusion.estimators.aid_source import FUSED, AidSource, Verdict
 from altfusion.estimators.health import STEP_BITS
 
 
@@ -42,7 +42,7 @@ class Gating:
             if sigmas > 0.0:
                 source.gate_width = sigmas * math.sqrt(max(variance, 0.0))
             self.accept(source, aids_height)
-            return Verdict.FUSED
+            return FUSED
         if source.rejected_since is None:
             source.rejected_since = now
         if self.params.fault_detection:
