@@ -18,7 +18,7 @@ sums and fuses its products in its own order.
 from collections.abc import Sequence
 from functools import cache
 from itertools import repeat
-from operator import add, truediv
+from operator import add, mul, truediv
 from typing import NamedTuple
 
 import numpy as np
@@ -250,9 +250,9 @@ def update_scalar(x: Vector, P: Matrix, H: Sequence[tuple[int, float]], innovati
     row = _times_row(P, H)
     S = sparse_dot(row, H) + variance
     K = list(map(truediv, row, repeat(S)))                         # r / S, without a frame
+    x_new = list(map(add, x, map(mul, K, repeat(innovation))))     # x + K y, without a frame
     # One flat comprehension (a frame per row costs more than its arithmetic), cut into
     # rows by map.
-    x_new = [xa + ka * innovation for xa, ka in zip(x, K)]
     P_flat = [p_ab - (k_a * r_b + r_a * k_b) + k_a * k_b * S
               for P_a, r_a, k_a in zip(P, row, K)
               for p_ab, r_b, k_b in zip(P_a, row, K)]
