@@ -467,7 +467,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'BaoDriftEstimator': 'f2fc439c7f20e3a2',
         'YangFusionKF': 'be4eb02f0ef376a9',
         'XuSHAEKF': 'a5ddb8a4b0a628cd',
-        'AltitudeEKF': '7a7465a8317409b2',
+        'AltitudeEKF': '6d78f153df1964c4',
     },
     ('range_terrain', False): {
         'BaselineKF': 'be46e0a0ca6c641d',

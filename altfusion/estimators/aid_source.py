@@ -43,11 +43,12 @@ class InnovationWindow:
         """Add the sample (y, S) of time ``now`` and drop those older than ``span``."""
         y = min(max(y, -MAX_WINDOW_VALUE), MAX_WINDOW_VALUE)
         S = min(max(S, 0.0), MAX_WINDOW_VALUE)
-        self.samples.append((now, y, S))
+        samples = self.samples
+        samples.append((now, y, S))
         self.sum_y += y
         self.sum_S += S
-        while now - self.samples[0][0] > span:
-            _, old_y, old_S = self.samples.popleft()
+        while now - samples[0][0] > span:
+            _, old_y, old_S = samples.popleft()
             self.sum_y -= old_y
             self.sum_S -= old_S
 
@@ -58,10 +59,11 @@ class InnovationWindow:
         self.sigmas = math.inf
 
     def mean(self) -> float:
-        return self.sum_y / self.n
+        return self.sum_y / len(self.samples)
 
     def mean_variance(self) -> float:
-        return max(self.sum_S, 0.0) / (self.n * self.n)
+        n = len(self.samples)
+        return max(self.sum_S, 0.0) / (n * n)
 
     def one_sided(self, min_samples: int) -> bool:
         """True if the window holds ``min_samples`` or more innovations, all of one sign (a
@@ -84,6 +86,10 @@ class Verdict(Enum):
     """An isolated source with a constant offset: the estimator's offset state moved onto it
     and the source re-admitted: consumed, not fused."""
 
+
+FUSED = Verdict.FUSED
+""":attr:`Verdict.FUSED` as a module constant, for the per-sample paths: an enum member read
+through its class takes the metaclass's slow attribute lookup (~0.1 µs), a global does not."""
 
 class AidSource:
     """The state of one source (``baro``, ``gps``, ``radar``, ``laser``, ``gps_vz``,

@@ -77,6 +77,7 @@ import math
 from dataclasses import dataclass
 
 from altfusion.errors import ParameterError
+from altfusion.estimators.aid_source import FUSED
 from altfusion.estimators.base import MAX_DELAY, Estimator, HealthParams, Verdict
 from altfusion.estimators.health import NOISE_CHECKED, STEP_BITS, UNKNOWN_STD
 from altfusion.estimators.kalman import quadratic_form, shift_state, update_scalar
@@ -90,6 +91,9 @@ from altfusion.params import param
 H, V, BA, D, K, T, G = range(7)
 N = 7
 """Indices and size of the state vector [h, v, b_a, d, k, t, g]."""
+
+RANGEFINDERS = (("radar", RADAR), ("laser", LASER))
+"""The rangefinders and their streams, in the order their samples are fused."""
 
 HEIGHT_REFERENCES = ("gps", "baro", "range")
 
@@ -285,7 +289,8 @@ class AltitudeEKF(Estimator):
     def _predict(self, acc_sample) -> None:
         """x⁺ = F x + B a, P⁺ = F P Fᵀ + Q over one step (written out: F differs from I in
         the rows of h and v only)."""
-        dt, now, p = self.dt, self.time, self.params
+        clock, p = self.clock, self.params
+        dt, now = clock.step_size, clock.now
         previous = self._acc
         if acc_sample is not None:
             self._acc = (acc_sample["acc_time"], acc_sample["acc_z"])
@@ -304,14 +309,16 @@ class AltitudeEKF(Estimator):
         self._acc_used = acc_on
         if not self.started:
             return
-        x, P = self.x, [row[:] for row in self.P]
+        x, P = self.x, list(map(list.copy, self.P))
         c = 0.5 * dt * dt                                 # ∂h⁺/∂(-b_a)
         e = dt                                            # ∂v⁺/∂(-b_a)
         a = a_in - x[BA]
         x = [x[H] + dt * x[V] + 0.5 * dt * dt * a, x[V] + dt * a, *x[2:]]
-        P[H] = [p0 + dt * p1 - c * p2 for p0, p1, p2 in zip(P[H], P[V], P[BA], strict=True)]
-        P[V] = [p1 - e * p2 for p1, p2 in zip(P[V], P[BA], strict=True)]
-        for row in P:
+        P[H] = [p0 + dt * p1 - c * p2 for p0, p1, p2 in zip(P[H], P[V], P[BA])]  # noqa: B905
+        P[V] = [p1 - e * p2 for p1, p2 in zip(P[V], P[BA])]     # noqa: B905 (a keyword call)
+        # (F P) Fᵀ in columns h and v of rows h and v; the other rows take theirs from rows h
+        # and v in the symmetry loop below (computing them here too would be overwritten)
+        for row in (P[H], P[V]):
             row[H], row[V] = row[H] + dt * row[V] - c * row[BA], row[V] - e * row[BA]
         noise = self.sensor_noise["acc"] if self.acc_check is None else self.acc_check.noise
         scale = 1.0 if self.motion_noise is None else self.motion_noise.scale
@@ -363,12 +370,14 @@ class AltitudeEKF(Estimator):
         if baro is not None and not self._stuck("baro", baro["baro_h"]):
             self._fuse_height("baro", baro["baro_h"], baro["baro_time"] - self.params.baro_delay,
                               self.sensor_noise["baro"])
-        for name, stream, sigma in (("radar", RADAR, self.sensor_noise["radar"]),
-                                    ("laser", LASER, self.sensor_noise["laser"])):
+        for name, stream in RANGEFINDERS:
             sample = samples.get(stream)
-            if sample is None or self._stuck(name, sample[f"{name}_h"]):
+            if sample is None:
                 continue
-            reading, stamp = sample[f"{name}_h"], sample[f"{name}_time"] - self.params.range_delay
+            reading, stamp = sample[stream.values[0]], sample[stream.time] - self.params.range_delay
+            if self._stuck(name, reading):
+                continue
+            sigma = self.sensor_noise[name]
             if self.range_aid is not None and self.started:
                 self.range_aid.sample(name, stamp, reading, sigma * sigma, self.x[V],
                                       self.P[V][V])
@@ -404,7 +413,7 @@ class AltitudeEKF(Estimator):
         aid = self.range_aid
         if aid is None or not self.started:
             return
-        if aid.update(self.time):
+        if aid.update(self.clock.now):
             walk = 0.0 if self.params.height_ref == "range" else self.params.terrain_psd
             self._q_rw[T] = 0.0 if aid.active else walk
             self.note(f"range aid {'started: the terrain held' if aid.active else 'stopped'}")
@@ -470,7 +479,7 @@ class AltitudeEKF(Estimator):
     def _back(self, stamp: float) -> tuple[float, float, list[tuple[int, float]], float]:
         """The state taken back to ``stamp``: h(s), v(s), the Jacobian row of h(s) on the
         present state, and δ (≥ 0: a sample is never fused before its stamp)."""
-        delta = max(0.0, self.time - stamp)
+        delta = max(0.0, self.clock.now - stamp)
         x = self.x
         if delta == 0.0:
             return x[H], x[V], [(H, 1.0)], 0.0
@@ -639,7 +648,7 @@ class AltitudeEKF(Estimator):
                 check.gated(y, S)
             else:
                 check.forget()
-        return verdict is Verdict.FUSED
+        return verdict is FUSED
 
     # ------------------------------------------------------------------ start and resets
     def _offset_index(self, source: str) -> int | None:

@@ -211,23 +211,26 @@ class Estimator(SampleIntake, Gating, Component):
 
     def update(self) -> None:
         self._step_flags = 0
-        self.propagate(self.dt)
+        clock = self.clock
+        self.propagate(clock.step_size)
         self.fuse_samples(self.due_samples())
         if self.acc_check is not None and self.started:
-            self.acc_check.step(self.time)
+            self.acc_check.step(clock.now)
         self._publish_health()
 
     def _publish_health(self) -> None:
         """``h_valid`` and ``status`` at the end of a step."""
         flags = self._step_flags
-        aided = self.time - self._last_aiding <= self.params.aiding_timeout
-        if self.started:
+        started = self.started
+        aided = self.clock.now - self._last_aiding <= self.params.aiding_timeout
+        if started:
             flags |= STEP_BITS.INITIALIZED
             if not aided:
                 flags |= STEP_BITS.DEAD_RECKONING
-        self.h_valid = bool(self.started and aided)
+        self.h_valid = bool(started and aided)
         for source in self.aid_sources:
             flags |= source.bits
-        if self.acc_check is not None and self.acc_check.bad:
+        check = self.acc_check
+        if check is not None and check.bad:
             flags |= STEP_BITS.BAD_ACC_VERTICAL
         self.status = flags

@@ -74,7 +74,7 @@ def bias_test(source: AidSource, heights: Iterable[AidSource], now: float, timeo
     half_width = sigmas * math.sqrt(max(variance, 0.0))
     window.add(now, min(max(innovation, -half_width), half_width), variance, timeout)
     window.sigmas = threshold = min(sigmas, BIAS_SIGMAS)
-    if window.n < BIAS_MIN_SAMPLES:
+    if len(window.samples) < BIAS_MIN_SAMPLES:              # window.n without a frame
         source.biased = False
         return False
     mean, spread = window.mean(), math.sqrt(window.mean_variance())

@@ -9,7 +9,7 @@ source that stays rejected while another pins the height.
 import math
 
 from altfusion.estimators import fault_detection as faults
-from altfusion.estimators.aid_source import AidSource, Verdict
+from altfusion.estimators.aid_source import FUSED, AidSource, Verdict
 from altfusion.estimators.health import STEP_BITS
 
 
@@ -33,17 +33,18 @@ class Gating:
         else:
             ratio = 0.0
         source.test_ratio = min(ratio, 1e300)
-        source.innovation, source.variance, source.last_gated = innovation, variance, self.time
-        biased = sigmas > 0.0 and self.params.fault_detection and faults.bias_test(
-            source, self._heights, self.time, self.params.reset_timeout, innovation,
+        now, params = self.clock.now, self.params
+        source.innovation, source.variance, source.last_gated = innovation, variance, now
+        biased = sigmas > 0.0 and params.fault_detection and faults.bias_test(
+            source, self._heights, now, params.reset_timeout, innovation,
             variance, sigmas) and not source.noisy and not self._accelerometer_suspect()
         if ratio <= 1.0 and not biased:
             if sigmas > 0.0:
                 source.gate_width = sigmas * math.sqrt(max(variance, 0.0))
             self.accept(source, aids_height)
-            return Verdict.FUSED
+            return FUSED
         if source.rejected_since is None:
-            source.rejected_since = self.time
+            source.rejected_since = now
         if self.params.fault_detection:
             verdict = self._resolve(source, innovation, variance)
             if verdict is not None:
@@ -141,6 +142,7 @@ class Gating:
     def accept(self, source: AidSource, aids_height: bool = True) -> None:
         """Record that a sample of ``source`` is fused (a height source aids the height unless
         ``aids_height`` is false)."""
-        source.fused(self.time, aids_height)
+        now = self.clock.now
+        source.fused(now, aids_height)
         if aids_height and source.height:
-            self._last_aiding = self.time
+            self._last_aiding = now

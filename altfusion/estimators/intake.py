@@ -67,52 +67,60 @@ class SampleIntake:
         """The samples to fuse in this step: the new ones not stamped ahead of the clock and
         the held ones now due, by stream."""
         samples = {}
+        now = self.clock.now
+        due_by = now + 1e-9 * max(1.0, abs(now))       # not ahead of the clock (rounding aside)
         last_count, held = self._last_count, self._held
         for stream in self.streams:
+            prefix = stream.prefix
             count = getattr(self, stream.count)
-            if count != last_count[stream.prefix]:
-                sample = self._new_sample(stream, count)
+            if count != last_count[prefix]:
+                sample = self._new_sample(stream, count, now)
                 if sample is not None:
-                    held[stream.prefix] = sample
+                    if sample[stream.time] <= due_by:   # the usual case: fused at once
+                        if held:
+                            held.pop(prefix, None)
+                        samples[stream] = sample
+                    else:
+                        held[prefix] = sample
+                    continue
             if held:
-                sample = held.get(stream.prefix)
-                if sample is not None and self._due(sample[stream.time]):
-                    del held[stream.prefix]
+                sample = held.get(prefix)
+                if sample is not None and sample[stream.time] <= due_by:
+                    del held[prefix]
                     samples[stream] = sample
         return samples
 
-    def _due(self, stamp: float) -> bool:
-        """True if a sample stamped ``stamp`` is not ahead of the clock (rounding aside)."""
-        now = self.time
-        return stamp <= now + 1e-9 * max(1.0, abs(now))
-
-    def _new_sample(self, stream: Stream, count: int) -> dict[str, float] | None:
+    def _new_sample(self, stream: Stream, count: int, now: float) -> dict[str, float] | None:
         """The sample of ``stream``, whose count changed to ``count``, if it is valid, finite,
-        plausible and stamped in time (module documentation), else None."""
+        plausible and stamped in time for the clock's ``now`` (module documentation), else
+        None."""
         prefix = stream.prefix
-        last = self._last_count[prefix]
-        self._last_count[prefix] = count
+        last_count = self._last_count
+        last = last_count[prefix]
+        last_count[prefix] = count
         if count > last + 1:
             self.note(f"{prefix}: {count - last - 1} sample(s) arrived between two "
                       f"estimator steps; only the latest is fused")
         if stream.valid and not getattr(self, stream.valid):
             return None
-        sample = dict(zip(stream.fields, map(float, stream.read(self)), strict=True))
+        sample = dict(zip(stream.fields, map(float, stream.read(self))))  # noqa: B905 (fast)
         if not all(map(math.isfinite, sample.values())):
             bad = {name: value for name, value in sample.items() if not math.isfinite(value)}
             self._ignore(stream, f"non-finite sample ignored {bad}")
             return None
         stamp = sample[stream.time]
-        lead = stamp - self.time
-        if lead > self.params.max_sample_lead:
+        lead = stamp - now
+        params = self.params
+        if lead > params.max_sample_lead:
             return self._refuse(stream, f"sample stamped {lead:.4g} s ahead of the clock (more "
                                         f"than max_sample_lead) refused")
-        if -lead > self.params.max_sample_delay:
+        if -lead > params.max_sample_delay:
             return self._refuse(stream, f"sample stamped {-lead:.4g} s behind the clock (more "
                                         f"than max_sample_delay): stale, refused")
-        if stamp < self._last_stamp[prefix]:
+        last_stamp = self._last_stamp
+        if stamp < last_stamp[prefix]:
             return self._refuse(stream, f"sample stamped {stamp!r} s, before the stream's last "
-                                        f"sample ({self._last_stamp[prefix]!r} s): refused")
+                                        f"sample ({last_stamp[prefix]!r} s): refused")
         for name, source, bound in stream.bounds:
             value = sample[name]
             if abs(value) > bound:
@@ -123,7 +131,7 @@ class SampleIntake:
         if lead > 0.0:
             self._step_flags |= STEP_BITS.SAMPLE_HELD
         self._seen.add(prefix)
-        self._last_stamp[prefix] = stamp
+        last_stamp[prefix] = stamp
         return sample
 
     def _refuse(self, stream: Stream, message: str) -> None:

@@ -12,9 +12,13 @@ operation on a 3x3 array costs ~0.5 µs whatever it computes, a float operation 
 They agree with the numpy forms to rounding (tests/test_kalman.py) but not bit for bit: BLAS
 sums and fuses its products in its own order.
 """
+# ruff: noqa: B905  (the scalar forms zip sequences of equal lengths by construction; a
+# zip(..., strict=...) is a keyword call, which costs more than a short row's arithmetic)
 
 from collections.abc import Sequence
 from functools import cache
+from itertools import repeat
+from operator import add, mul, truediv
 from typing import NamedTuple
 
 import numpy as np
@@ -130,31 +134,32 @@ def predict_constant_acceleration(x: Vector, P: Matrix, dt: float, Q: Matrix,
 
     P and Q must be symmetric; P⁻ is, exactly (its upper triangle is mirrored, and the
     constant states' block P + Q is the same float on either side of the diagonal)."""
-    h, v, a = x[:3]
-    (p00, p01, p02), (_, p11, p12), (_, _, p22) = (row[:3] for row in P[:3])
+    h, v, a = x[0], x[1], x[2]
+    P0, P1, P2 = P[0], P[1], P[2]
+    p00, p01, p02, p11, p12, p22 = P0[0], P0[1], P0[2], P1[1], P1[2], P2[2]
+    Q0, Q1, Q2 = Q[0], Q[1], Q[2]
     half = dt * dt / 2.0
     r00 = p00 + dt * p01 + half * p02                   # first row of F P
     r01 = p01 + dt * p11 + half * p12
     r02 = p02 + dt * p12 + half * p22
     r11 = p11 + dt * p12                                # second row (its last two entries)
     r12 = p12 + dt * p22
-    m00 = r00 + dt * r01 + half * r02 + Q[0][0]        # (F P) Fᵀ + Q, upper triangle
-    m01 = r01 + dt * r02 + Q[0][1]
-    m02 = r02 + Q[0][2]
-    m11 = r11 + dt * r12 + Q[1][1]
-    m12 = r12 + Q[1][2]
-    m22 = p22 + Q[2][2]
+    m00 = r00 + dt * r01 + half * r02 + Q0[0]          # (F P) Fᵀ + Q, upper triangle
+    m01 = r01 + dt * r02 + Q0[1]
+    m02 = r02 + Q0[2]
+    m11 = r11 + dt * r12 + Q1[1]
+    m12 = r12 + Q1[2]
+    m22 = p22 + Q2[2]
     x_new = (h + dt * v + half * a, v + dt * a, a)
     if len(x) == 3:
         return x_new, ((m00, m01, m02), (m01, m11, m12), (m02, m12, m22))
-    extra = range(3, len(x))
-    P0, P1, P2 = P[0], P[1], P[2]
-    c0 = [P0[k] + dt * P1[k] + half * P2[k] + Q[0][k] for k in extra]   # rows of F₃ times
-    c1 = [P1[k] + dt * P2[k] + Q[1][k] for k in extra]                  # the constant
-    c2 = [P2[k] + Q[2][k] for k in extra]                               # states' columns
+    c0 = [p0 + dt * p1 + half * p2 + q                  # rows of F₃ times the constant
+          for p0, p1, p2, q in zip(P0[3:], P1[3:], P2[3:], Q0[3:])]        # states' columns
+    c1 = [p1 + dt * p2 + q for p1, p2, q in zip(P1[3:], P2[3:], Q1[3:])]
+    c2 = list(map(add, P2[3:], Q2[3:]))
     rows = [[m00, m01, m02, *c0], [m01, m11, m12, *c1], [m02, m12, m22, *c2]]
-    rows += [[c0[i], c1[i], c2[i], *[P[k][j] + Q[k][j] for j in extra]]
-             for i, k in enumerate(extra)]
+    for d0, d1, d2, P_k, Q_k in zip(c0, c1, c2, P[3:], Q[3:]):   # a loop and map: no frames
+        rows.append([d0, d1, d2, *map(add, P_k[3:], Q_k[3:])])
     return (*x_new, *x[3:]), rows
 
 
@@ -221,7 +226,14 @@ def update_state_component(x: Vector, P: Matrix, index: int, z: float, variance:
 def quadratic_form(P: Matrix, H: Sequence[tuple[int, float]]) -> float:
     """H P Hᵀ for a sparse row H ((state index, coefficient) pairs): the variance of the
     measured combination of states, the innovation variance without R."""
-    return sparse_dot({i: sparse_dot(P[i], H) for i, _ in H}, H)
+    total = 0.0                           # H (P Hᵀ), each sum from 0 in H's order, as
+    for i, h in H:                        # sparse_dot of sparse_dot gives them
+        P_i = P[i]
+        inner = 0.0
+        for j, c in H:
+            inner += c * P_i[j]
+        total += h * inner
+    return total
 
 
 def update_scalar(x: Vector, P: Matrix, H: Sequence[tuple[int, float]], innovation: float,
@@ -237,12 +249,20 @@ def update_scalar(x: Vector, P: Matrix, H: Sequence[tuple[int, float]], innovati
     P stays exactly symmetric (each entry's sum is the same float for (a, b) and (b, a))."""
     row = _times_row(P, H)
     S = sparse_dot(row, H) + variance
-    K = [r / S for r in row]
-    x_new = [xa + ka * innovation for xa, ka in zip(x, K, strict=True)]
-    P_new = [[p_ab - (k_a * r_b + r_a * k_b) + k_a * k_b * S          # equal lengths by
-              for p_ab, r_b, k_b in zip(P_a, row, K, strict=False)]   # construction: zip's
-             for P_a, r_a, k_a in zip(P, row, K, strict=False)]       # check costs 20 %
-    return x_new, P_new, S
+    K = list(map(truediv, row, repeat(S)))                         # r / S, without a frame
+    x_new = list(map(add, x, map(mul, K, repeat(innovation))))     # x + K y, without a frame
+    # One flat comprehension (a frame per row costs more than its arithmetic), cut into
+    # rows by map.
+    P_flat = [p_ab - (k_a * r_b + r_a * k_b) + k_a * k_b * S
+              for P_a, r_a, k_a in zip(P, row, K)
+              for p_ab, r_b, k_b in zip(P_a, row, K)]
+    return x_new, list(map(P_flat.__getitem__, _row_slices(len(K)))), S
+
+
+@cache
+def _row_slices(n: int) -> tuple[slice, ...]:
+    """The slices of the rows of an n x n matrix stored row after row in one list."""
+    return tuple(slice(i, i + n) for i in range(0, n * n, n))
 
 
 def _times_row(P: Matrix, H: Sequence[tuple[int, float]]) -> list[float]:

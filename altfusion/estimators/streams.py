@@ -5,61 +5,11 @@ A sensor stream is a group of inputs named by the signal contract: the held samp
 (``gps_fix``, ``radar_valid``...). A new sample is one whose count changed.
 """
 
-from dataclasses import dataclass
-from functools import cached_property
+from dataclasses import dataclass, field
+from functools import partial
 from operator import attrgetter
 
 from altfusion.estimators.health import HEIGHT_SOURCES, SOURCES
-
-
-@dataclass(frozen=True, eq=False)
-class Stream:
-    """The inputs of one sensor stream.
-
-    Streams are this module's constants and compare by identity: they key the per-step
-    sample dicts, where the built-in identity hash costs nothing (a field hash would run
-    Python code at every lookup)."""
-
-    prefix: str
-    values: tuple[str, ...]
-    valid: str | None = None
-
-    @cached_property
-    def count(self) -> str:
-        return f"{self.prefix}_count"
-
-    @cached_property
-    def time(self) -> str:
-        return f"{self.prefix}_time"
-
-    @cached_property
-    def fields(self) -> tuple[str, ...]:
-        """The inputs a sample carries: the values, then the time stamp."""
-        return (*self.values, self.time)
-
-    @cached_property
-    def read(self) -> attrgetter:
-        """The getter of a sample's :attr:`fields` from an object: a tuple of their values."""
-        return attrgetter(*self.fields)
-
-    @cached_property
-    def bounds(self) -> tuple[tuple[str, str, float], ...]:
-        """(input, source charged, bound) of each value with a :data:`PLAUSIBLE_RANGE`."""
-        return tuple((name, *PLAUSIBLE_RANGE[name]) for name in self.fields
-                     if name in PLAUSIBLE_RANGE)
-
-
-BARO = Stream("baro", ("baro_h",))
-BARO_T = Stream("baro", ("baro_h", "baro_T"))
-BARO_P = Stream("baro", ("baro_h", "baro_p"))
-GPS = Stream("gps", ("gps_h",), "gps_fix")
-GPS_QUALITY = Stream("gps", ("gps_h", "gps_vdop", "gps_nsat"), "gps_fix")
-GPS_VZ = Stream("gps", ("gps_h", "gps_vz"), "gps_fix")
-ACC = Stream("acc", ("acc_z",))
-RADAR = Stream("radar", ("radar_h",), "radar_valid")
-LASER = Stream("laser", ("laser_h",), "laser_valid")
-BARO_ALL = Stream("baro", ("baro_h", "baro_p", "baro_T"))
-GPS_ALL = Stream("gps", ("gps_h", "gps_vz", "gps_vdop", "gps_nsat"), "gps_fix")
 
 ACC_CLIP = 0.95 * 16.0 * 9.80665
 """A vertical acceleration beyond 95 % of ±16 g (the full scale of common MEMS
@@ -73,6 +23,53 @@ PLAUSIBLE_RANGE = {"acc_z": ("acc", ACC_CLIP), "gps_vz": ("gps_vz", 1000.0),
 accelerometer's clipping level :data:`ACC_CLIP`; 1000 m/s, about Mach 3; ±100 km of height,
 the Kármán line. A value beyond its bound cannot be a measurement: the sample is rejected as
 that source's (test ratio value²/bound²) and takes no part in the step."""
+
+
+@dataclass(frozen=True, eq=False)
+class Stream:
+    """The inputs of one sensor stream.
+
+    Streams are this module's constants and compare by identity: they key the per-step
+    sample dicts, where the built-in identity hash costs nothing (a field hash would run
+    Python code at every lookup). The names derived from the fields are plain attributes,
+    set once (read at every sample: a plain attribute is read faster than a cached
+    property)."""
+
+    prefix: str
+    values: tuple[str, ...]
+    valid: str | None = None
+    count: str = field(init=False)
+    """``<prefix>_count``."""
+    time: str = field(init=False)
+    """``<prefix>_time``."""
+    fields: tuple[str, ...] = field(init=False)
+    """The inputs a sample carries: the values, then the time stamp."""
+    read: attrgetter = field(init=False, repr=False)
+    """The getter of a sample's :attr:`fields` from an object: a tuple of their values."""
+    bounds: tuple[tuple[str, str, float], ...] = field(init=False, repr=False)
+    """(input, source charged, bound) of each value with a :data:`PLAUSIBLE_RANGE`."""
+
+    def __post_init__(self) -> None:
+        set_once = partial(object.__setattr__, self)          # frozen: derived once, here
+        set_once("count", f"{self.prefix}_count")
+        set_once("time", f"{self.prefix}_time")
+        set_once("fields", (*self.values, self.time))
+        set_once("read", attrgetter(*self.fields))
+        set_once("bounds", tuple((name, *PLAUSIBLE_RANGE[name]) for name in self.fields
+                                 if name in PLAUSIBLE_RANGE))
+
+
+BARO = Stream("baro", ("baro_h",))
+BARO_T = Stream("baro", ("baro_h", "baro_T"))
+BARO_P = Stream("baro", ("baro_h", "baro_p"))
+GPS = Stream("gps", ("gps_h",), "gps_fix")
+GPS_QUALITY = Stream("gps", ("gps_h", "gps_vdop", "gps_nsat"), "gps_fix")
+GPS_VZ = Stream("gps", ("gps_h", "gps_vz"), "gps_fix")
+ACC = Stream("acc", ("acc_z",))
+RADAR = Stream("radar", ("radar_h",), "radar_valid")
+LASER = Stream("laser", ("laser_h",), "laser_valid")
+BARO_ALL = Stream("baro", ("baro_h", "baro_p", "baro_T"))
+GPS_ALL = Stream("gps", ("gps_h", "gps_vz", "gps_vdop", "gps_nsat"), "gps_fix")
 
 
 def stream_inputs(streams: tuple[Stream, ...]) -> tuple[str, ...]:

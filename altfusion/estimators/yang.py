@@ -79,7 +79,8 @@ import math
 from collections import deque
 from dataclasses import dataclass
 
-from altfusion.estimators.base import MAX_DELAY, Estimator, HealthParams, Verdict
+from altfusion.estimators.aid_source import FUSED
+from altfusion.estimators.base import MAX_DELAY, Estimator, HealthParams
 from altfusion.estimators.kalman import (
     constant_states_noise,
     predict_constant_acceleration,
@@ -248,7 +249,7 @@ class YangFusionKF(Estimator):
     def fuse_samples(self, samples) -> None:
         """Gate and store the new heights, fuse them at a benchmark sample (eqs. 5-8), then
         one Kalman update (eqs. 12-14; also publishes the time update of :meth:`propagate`)."""
-        now, p = self.time, self.params
+        now, p = self.clock.now, self.params
         arrived = self._new_heights(samples, now)
         benchmark = self._benchmark(now)
         heights = None
@@ -338,7 +339,7 @@ class YangFusionKF(Estimator):
         row = speed_row(lag)
         return self.gate(self.aid["gps_vz"], vz - sparse_dot(self.x, row),
                          quadratic_form(self.P, row) + self.params.R_gps_vz,
-                         self.params.gate_sigma) is Verdict.FUSED
+                         self.params.gate_sigma) is FUSED
 
     def accelerometer_noise(self) -> float:
         """σ_a = √R_acc: its scatter checked with ``fault_detection``."""
@@ -378,7 +379,7 @@ class YangFusionKF(Estimator):
             P[0][0] + 2.0 * P[0][row[1][0]] + P[row[1][0]][row[1][0]]
         return self.gate(self.aid[name], z - sparse_dot(self.x, row),
                          variance + self.variances[name],
-                         self.params.gate_sigma) is Verdict.FUSED
+                         self.params.gate_sigma) is FUSED
 
     def _initial_covariance(self, height_variance: float) -> tuple[tuple[float, ...], ...]:
         """Diagonal: ``height_variance``, then the initial variances of speed, acceleration
@@ -391,9 +392,9 @@ class YangFusionKF(Estimator):
 
     def _benchmark(self, now: float) -> str | None:
         """The first live height sensor in order of decreasing sampling period (Section 4.2)."""
-        for name in HEIGHT_SENSORS:
-            history = self.history[name]
-            if history and history[-1][0] >= now - self.params.max_sample_age:
+        oldest = now - self.params.max_sample_age
+        for name, history in self.history.items():                  # in HEIGHT_SENSORS order
+            if history and history[-1][0] >= oldest:
                 return name
         return None
 

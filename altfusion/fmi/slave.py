@@ -51,6 +51,7 @@ import contextlib
 import copy
 import sys
 import traceback
+from collections.abc import Callable
 from dataclasses import replace
 from operator import attrgetter
 from pathlib import Path
@@ -107,6 +108,41 @@ def unit_definitions(units: set[str]) -> Element:
         unit = SubElement(element, "Unit", {"name": name})
         SubElement(unit, "BaseUnit", {k: str(v) for k, v in BASE_UNITS[name].items()})
     return element
+
+
+def _value_getter(label: str, kind: type, fallback: Any) -> Callable[..., list]:
+    """The slave's ``get_<type>`` method (pythonfmu calls it by name at every fmi2Get*): the
+    values of a list of value references, read by the one accessor kept for that list; on an
+    error ``fallback`` for each, logged as ``label``. A method of its own per type, not a
+    call to a shared one: one Python frame less on the hottest path of an importer."""
+
+    def get(self: "CoreSlave", vrs) -> list:
+        if self._initializing and self._stale:
+            self._refresh_initial_outputs()
+        try:
+            cache = self._readers[kind]
+            read = cache.get(tuple(vrs)) or self._new_batch(cache, self._build_reader, kind, vrs)
+            return read()
+        except Exception:
+            self._log_exception(label)
+            return [fallback] * len(vrs)
+
+    return get
+
+
+def _value_setter(label: str, kind: type) -> Callable[..., None]:
+    """The slave's ``set_<type>`` method, as :func:`_value_getter` (errors logged as
+    ``label``)."""
+
+    def set_values(self: "CoreSlave", vrs, values) -> None:
+        try:
+            cache = self._writers[kind]
+            write = cache.get(tuple(vrs)) or self._new_batch(cache, self._build_writer, kind, vrs)
+            write(values)
+        except Exception:
+            self._log_exception(label)
+
+    return set_values
 
 
 class CoreSlave(Fmi2Slave, metaclass=ReusedSlaveClass):
@@ -363,48 +399,14 @@ class CoreSlave(Fmi2Slave, metaclass=ReusedSlaveClass):
             self._stale = self._initializing
         return write_inputs
 
-    def _get(self, label: str, kind: type, vrs, fallback) -> list:
-        if self._initializing and self._stale:
-            self._refresh_initial_outputs()
-        try:
-            cache = self._readers[kind]
-            read = cache.get(tuple(vrs)) or self._new_batch(cache, self._build_reader, kind, vrs)
-            return read()
-        except Exception:
-            self._log_exception(label)
-            return [fallback] * len(vrs)
-
-    def _set(self, label: str, kind: type, vrs, values) -> None:
-        try:
-            cache = self._writers[kind]
-            write = cache.get(tuple(vrs)) or self._new_batch(cache, self._build_writer, kind, vrs)
-            write(values)
-        except Exception:
-            self._log_exception(label)
-
-    def get_real(self, vrs):
-        return self._get("getReal", Real, vrs, float("nan"))
-
-    def get_integer(self, vrs):
-        return self._get("getInteger", Integer, vrs, 0)
-
-    def get_boolean(self, vrs):
-        return self._get("getBoolean", Boolean, vrs, False)
-
-    def get_string(self, vrs):
-        return self._get("getString", String, vrs, "")
-
-    def set_real(self, vrs, values):
-        self._set("setReal", Real, vrs, values)
-
-    def set_integer(self, vrs, values):
-        self._set("setInteger", Integer, vrs, values)
-
-    def set_boolean(self, vrs, values):
-        self._set("setBoolean", Boolean, vrs, values)
-
-    def set_string(self, vrs, values):
-        self._set("setString", String, vrs, values)
+    get_real = _value_getter("getReal", Real, float("nan"))
+    get_integer = _value_getter("getInteger", Integer, 0)
+    get_boolean = _value_getter("getBoolean", Boolean, False)
+    get_string = _value_getter("getString", String, "")
+    set_real = _value_setter("setReal", Real)
+    set_integer = _value_setter("setInteger", Integer)
+    set_boolean = _value_setter("setBoolean", Boolean)
+    set_string = _value_setter("setString", String)
 
     # ----------------------------------------------------------------- FMU state
     def _current_state(self) -> dict[str, Any]:
