@@ -229,10 +229,10 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'estimator': '525d13579af2ee59',
     },
     ('yang2020_altitude_ekf', True): {
-        'estimator': '2a4d45771e69b287',
+        'estimator': '2ba94f528a12bf77',
     },
     ('yang2020_altitude_ekf', False): {
-        'estimator': 'b1b2b9e79ac188b6',
+        'estimator': '4bfcf071f124abdb',
     },
     ('xu2016_hover15', True): {
         'estimator': '0571cc41b072e0e7',
@@ -251,7 +251,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'BaoDriftEstimator': 'a87fd2f53cf931f0',
         'YangFusionKF': '098707d4fd07b77e',
         'XuSHAEKF': '9c5defc5c3aaaa6c',
-        'AltitudeEKF': 'e20cd270af9b07b7',
+        'AltitudeEKF': '173f872caef407ee',
     },
     ('nominal', False): {
         'BaselineKF': '929a3675d8bee9fb',
@@ -260,7 +260,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'BaoDriftEstimator': 'a87fd2f53cf931f0',
         'YangFusionKF': '890eff1f8b24b61d',
         'XuSHAEKF': '9c5defc5c3aaaa6c',
-        'AltitudeEKF': 'e20cd270af9b07b7',
+        'AltitudeEKF': '173f872caef407ee',
     },
     ('baro_step', True): {
         'BaselineKF': '28b1fb6ecc37a808',
@@ -269,7 +269,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'BaoDriftEstimator': '77f5faa6621e9c0d',
         'YangFusionKF': 'b0414347773e4aa3',
         'XuSHAEKF': '4bcd1d044427dad8',
-        'AltitudeEKF': '65d41db55d1312b5',
+        'AltitudeEKF': '8fe8b423682672b2',
     },
     ('baro_step', False): {
         'BaselineKF': '6f9a8561b801aef1',
@@ -278,7 +278,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'BaoDriftEstimator': '204ab30a5a58633a',
         'YangFusionKF': '3161792105d5e4d4',
         'XuSHAEKF': '4bcd1d044427dad8',
-        'AltitudeEKF': '92d440759a691cf5',
+        'AltitudeEKF': 'a329cd7053b76cc0',
     },
     ('baro_drift', True): {
         'BaselineKF': '009d5c4675ad0e97',
@@ -287,7 +287,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'BaoDriftEstimator': '60e32b5e580e2cbf',
         'YangFusionKF': 'df9eeed6f3a612a0',
         'XuSHAEKF': '8fcec7429f37b724',
-        'AltitudeEKF': 'eb39ea97befaba50',
+        'AltitudeEKF': '619e29e9fb8b20af',
     },
     ('baro_drift', False): {
         'BaselineKF': '009d5c4675ad0e97',
@@ -296,7 +296,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'BaoDriftEstimator': '60e32b5e580e2cbf',
         'YangFusionKF': 'd7ea27f25edbdb01',
         'XuSHAEKF': '8fcec7429f37b724',
-        'AltitudeEKF': 'eb39ea97befaba50',
+        'AltitudeEKF': '619e29e9fb8b20af',
     },
     ('gnss_step', True): {
         'BaselineKF': 'd4faa843b7ac2c3f',
@@ -305,7 +305,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'BaoDriftEstimator': '80836dccc411a6c1',
         'YangFusionKF': '16cd4402a7aa341f',
         'XuSHAEKF': 'de198d6d8db9994c',
-        'AltitudeEKF': '261c27c114797bf4',
+        'AltitudeEKF': '8b8d80e462a2ae00',
     },
     ('gnss_step', False): {
         'BaselineKF': 'ff849279b5043b70',
@@ -314,7 +314,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'BaoDriftEstimator': 'b456284a132c6e7f',
         'YangFusionKF': 'ae6569ba09d4982f',
         'XuSHAEKF': 'a6ef53ace81de018',
-        'AltitudeEKF': 'c860e5b0497ebb12',
+        'AltitudeEKF': '9c56b0ac179bf11f',
     },
     ('gnss_outage_return_off', True): {
         'BaselineKF': 'bfc10c0a782b5d57',
@@ -323,7 +323,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'BaoDriftEstimator': '57f1655b4a1eef4e',
         'YangFusionKF': '00dad65f5bcfd90f',
         'XuSHAEKF': '055e54fa403a0fe2',
-        'AltitudeEKF': 'd4d8d01409f93697',
+        'AltitudeEKF': 'a8453ddca9dab916',
     },
     ('gnss_outage_return_off', False): {
         'BaselineKF': 'f6d28e7ea512b494',
@@ -332,7 +332,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'BaoDriftEstimator': 'ff2fccce5bda17e8',
         'YangFusionKF': '8dc61369c55dc9da',
         'XuSHAEKF': 'f59e2caf17137796',
-        'AltitudeEKF': '99c35ec9e2521581',
+        'AltitudeEKF': 'a64fb34a9d9bfc82',
     },
     ('failover', True): {
         'BaselineKF': 'c4590d7a2c9beb11',
@@ -341,7 +341,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'BaoDriftEstimator': 'ab9796bec73c0713',
         'YangFusionKF': 'bbadcb2e562ff45a',
         'XuSHAEKF': '82680ce36e28eb7c',
-        'AltitudeEKF': 'ec89bffd73df59b0',
+        'AltitudeEKF': '7b1735b8badc606e',
     },
     ('failover', False): {
         'BaselineKF': 'c4590d7a2c9beb11',
@@ -350,7 +350,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'BaoDriftEstimator': 'ab9796bec73c0713',
         'YangFusionKF': '9d725422735b4914',
         'XuSHAEKF': '82680ce36e28eb7c',
-        'AltitudeEKF': 'ec89bffd73df59b0',
+        'AltitudeEKF': '7b1735b8badc606e',
     },
     ('all_fail', True): {
         'BaselineKF': 'fe144b7e33b2954f',
@@ -359,7 +359,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'BaoDriftEstimator': '96ba838f9b23957a',
         'YangFusionKF': '6c5594f845bef015',
         'XuSHAEKF': '796209752af083c1',
-        'AltitudeEKF': '27e068e1e0a34061',
+        'AltitudeEKF': 'b04d220d6e6461d5',
     },
     ('all_fail', False): {
         'BaselineKF': 'fe144b7e33b2954f',
@@ -368,7 +368,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'BaoDriftEstimator': '96ba838f9b23957a',
         'YangFusionKF': '88e69324ccd3abb6',
         'XuSHAEKF': '796209752af083c1',
-        'AltitudeEKF': '27e068e1e0a34061',
+        'AltitudeEKF': 'b04d220d6e6461d5',
     },
     ('silent', True): {
         'BaselineKF': '76fc94c1f0fd12a6',
@@ -377,7 +377,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'BaoDriftEstimator': '21d507274593b810',
         'YangFusionKF': '8ff876761b630685',
         'XuSHAEKF': '24624fbdb15746ac',
-        'AltitudeEKF': '82aae906f64237fa',
+        'AltitudeEKF': '551f441a6c9288c4',
     },
     ('silent', False): {
         'BaselineKF': '76fc94c1f0fd12a6',
@@ -386,7 +386,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'BaoDriftEstimator': '9ac9c50c2c40d6f6',
         'YangFusionKF': '548ffb8d7f13c21f',
         'XuSHAEKF': '24624fbdb15746ac',
-        'AltitudeEKF': '82aae906f64237fa',
+        'AltitudeEKF': '551f441a6c9288c4',
     },
     ('wild_sample', True): {
         'BaselineKF': '5f04a77bf18c0bcb',
@@ -395,7 +395,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'BaoDriftEstimator': 'c2cab204b201ee04',
         'YangFusionKF': 'e4104ebe8352d24e',
         'XuSHAEKF': '922db2762c16933c',
-        'AltitudeEKF': '26c92e225ecaa480',
+        'AltitudeEKF': '52e929d052683d5b',
     },
     ('wild_sample', False): {
         'BaselineKF': '5f04a77bf18c0bcb',
@@ -404,7 +404,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'BaoDriftEstimator': 'c2cab204b201ee04',
         'YangFusionKF': '8308243d37d0ec91',
         'XuSHAEKF': '922db2762c16933c',
-        'AltitudeEKF': '26c92e225ecaa480',
+        'AltitudeEKF': '52e929d052683d5b',
     },
     ('acc_bias', True): {
         'BaselineKF': '929a3675d8bee9fb',
@@ -413,7 +413,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'BaoDriftEstimator': 'a87fd2f53cf931f0',
         'YangFusionKF': '3b3bf6e30989a255',
         'XuSHAEKF': 'ce39282a343b83fb',
-        'AltitudeEKF': '1662a5845169a7fc',
+        'AltitudeEKF': '778b495826c18793',
     },
     ('acc_bias', False): {
         'BaselineKF': '929a3675d8bee9fb',
@@ -422,7 +422,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'BaoDriftEstimator': 'a87fd2f53cf931f0',
         'YangFusionKF': '0591022fd69d3364',
         'XuSHAEKF': 'ce39282a343b83fb',
-        'AltitudeEKF': '1662a5845169a7fc',
+        'AltitudeEKF': '778b495826c18793',
     },
     ('ground_effect', True): {
         'BaselineKF': 'b8c4a707ddfae2c8',
@@ -431,7 +431,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'BaoDriftEstimator': '796c2238f4b78243',
         'YangFusionKF': 'd98cafe218f2c6fe',
         'XuSHAEKF': 'e464183d39cecec1',
-        'AltitudeEKF': '42435461ee1c7c92',
+        'AltitudeEKF': '6b9c5b551b4dfeae',
     },
     ('ground_effect', False): {
         'BaselineKF': 'b8c4a707ddfae2c8',
@@ -440,7 +440,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'BaoDriftEstimator': '796c2238f4b78243',
         'YangFusionKF': '61f4a3f393b92b5f',
         'XuSHAEKF': 'e464183d39cecec1',
-        'AltitudeEKF': '42435461ee1c7c92',
+        'AltitudeEKF': '6b9c5b551b4dfeae',
     },
     ('prop_wash', True): {
         'BaselineKF': '1c344ad7083fdaea',
@@ -449,7 +449,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'BaoDriftEstimator': 'f3cfcfeb70146492',
         'YangFusionKF': '71164cacc53c3216',
         'XuSHAEKF': '3d2a1498367dcf7c',
-        'AltitudeEKF': 'f6b0e09e0f6c1173',
+        'AltitudeEKF': '773e72fcd14b7ddc',
     },
     ('prop_wash', False): {
         'BaselineKF': '1c344ad7083fdaea',
@@ -458,7 +458,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'BaoDriftEstimator': 'f3cfcfeb70146492',
         'YangFusionKF': '4f7b42214388cb0f',
         'XuSHAEKF': '3d2a1498367dcf7c',
-        'AltitudeEKF': 'f6b0e09e0f6c1173',
+        'AltitudeEKF': '773e72fcd14b7ddc',
     },
     ('range_terrain', True): {
         'BaselineKF': 'be46e0a0ca6c641d',
@@ -467,7 +467,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'BaoDriftEstimator': 'f2fc439c7f20e3a2',
         'YangFusionKF': 'be4eb02f0ef376a9',
         'XuSHAEKF': 'a5ddb8a4b0a628cd',
-        'AltitudeEKF': '6d78f153df1964c4',
+        'AltitudeEKF': '9ec474aadd351e3d',
     },
     ('range_terrain', False): {
         'BaselineKF': 'be46e0a0ca6c641d',
@@ -476,7 +476,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'BaoDriftEstimator': 'f2fc439c7f20e3a2',
         'YangFusionKF': '628be5bf078c3b94',
         'XuSHAEKF': 'a5ddb8a4b0a628cd',
-        'AltitudeEKF': '2e64130d2d3ae332',
+        'AltitudeEKF': 'bc11d792fd710b26',
     },
     ('weather_front', True): {
         'BaselineKF': '92a2a09b1ee561d0',
@@ -485,7 +485,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'BaoDriftEstimator': 'f33f04aafa9d924d',
         'YangFusionKF': 'e9a02dcbd1b52f5a',
         'XuSHAEKF': '8980280cb17134d8',
-        'AltitudeEKF': '277275fea42421d7',
+        'AltitudeEKF': '0d9b78d0eba5271d',
     },
     ('weather_front', False): {
         'BaselineKF': '92a2a09b1ee561d0',
@@ -494,7 +494,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'BaoDriftEstimator': 'f33f04aafa9d924d',
         'YangFusionKF': '75e04bc2aacc9c2a',
         'XuSHAEKF': '8980280cb17134d8',
-        'AltitudeEKF': '277275fea42421d7',
+        'AltitudeEKF': '0d9b78d0eba5271d',
     },
     ('early_late_samples', True): {
         'BaselineKF': '62dbe48b92bf5329',
@@ -503,7 +503,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'BaoDriftEstimator': '79737d8748106be3',
         'YangFusionKF': 'f1dfd2a6e3c7b727',
         'XuSHAEKF': 'e80bbcee5aabb0ee',
-        'AltitudeEKF': 'afee2d2587a061de',
+        'AltitudeEKF': 'dca35845c152592f',
     },
     ('early_late_samples', False): {
         'BaselineKF': '62dbe48b92bf5329',
@@ -512,7 +512,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'BaoDriftEstimator': '79737d8748106be3',
         'YangFusionKF': '7f2bc7e7008d1c47',
         'XuSHAEKF': 'e80bbcee5aabb0ee',
-        'AltitudeEKF': 'afee2d2587a061de',
+        'AltitudeEKF': 'dca35845c152592f',
     },
 }
 """(case, fault_detection) -> estimator component -> the first 16 hex digits of the sha256

@@ -324,7 +324,7 @@ class AltitudeEKF(Estimator):
         scale = 1.0 if self.motion_noise is None else self.motion_noise.scale
         q = noise**2 * max(dt, self._acc_period) if acc_on else p.accel_psd * scale
         P[H][H] += q * dt**3 / 3.0
-        P[H][V] += q * dt**2 / 2.0
+        P[V][H] += q * dt**2 / 2.0          # the symmetry loop copies it to P[H][V]
         P[V][V] += q * dt
         for i, psd in enumerate(self._q_rw):
             P[i][i] += psd * dt
