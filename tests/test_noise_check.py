@@ -155,3 +155,13 @@ def test_altitude_ekf_told_nothing_is_as_accurate_and_honest_as_told_the_noise()
     assert coverage >= 0.85
     rms = np.sqrt(np.mean([e**2 for e, _, _ in told_nothing]))
     assert rms <= 2.0 * np.sqrt(np.mean([e**2 for e, _, _ in told]))
+
+
+def test_a_source_found_noisy_is_spared_by_the_fault_layer_only_while_its_noise_is_learnt():
+    """A source 5x noisier than stated: ``noisy`` (not isolated, not bias-tested) once its
+    ratio passes NOISY, until its first window of pairs is in; then its gate and bias test
+    are sized by the learnt noise and a fault (a GNSS step) is judged as usual."""
+    check = checked(25.0, 50)
+    assert check.source.noisy
+    check = checked(25.0, 101)
+    assert check.factor > noise_check.NOISY and not check.source.noisy
