@@ -137,8 +137,7 @@ class _EstimatorHistory:
             if f"{source}_test_ratio" in self.columns or self.source_bit(
                     source, SourceBit.FUSED).any():
                 found += self.rejections(source)
-            if source in HEIGHT_SOURCES:
-                found += self.isolations(source)
+            found += self.isolations(source)
             if source in NOISE_CHECKED:
                 found += self.flag(self.source_bit(source, SourceBit.NOISE_INFLATED), source,
                                    NOISE_UP, NOISE_OK)
@@ -173,6 +172,8 @@ class _EstimatorHistory:
                 found.append(self.event(row, source, READMITTED))
                 continue
             found.append(self.event(row, source, ISOLATED))
+            if source not in HEIGHT_SOURCES:       # a stuck GNSS speed or accelerometer
+                continue
             carriers = [other for other in HEIGHT_SOURCES if other != source
                         and self.source_bit(other, SourceBit.FUSED)[row]
                         and not self.source_bit(other, SourceBit.ISOLATED)[row]]

@@ -153,3 +153,15 @@ def test_a_noise_flag_and_the_range_aid_are_said_when_set_and_cleared():
             if e.what in (NOISE_UP, NOISE_OK, RANGE_AID_ON, RANGE_AID_OFF)]
     assert said == [(0.1, "baro", NOISE_UP), (0.3, "baro", NOISE_OK), (0.3, "", RANGE_AID_ON),
                     (0.4, "", RANGE_AID_OFF)]
+
+
+def test_an_isolated_speed_is_said_without_a_height_fallback():
+    """AltitudeEKF isolates a stuck GNSS speed (estimators/stuck.py): said as isolated and
+    re-admitted, with no height source said to carry the height for it."""
+    fused = ON | BARO_FUSED | GPS_FUSED
+    stuck = fused | source_bit("gps_vz", SourceBit.ISOLATED)
+    rows = [(fused, 0.1, 0.1, 1, 0), (stuck, 0.1, 0.1, 1, 0), (stuck, 0.1, 0.1, 1, 0),
+            (fused, 0.1, 0.1, 1, 0)]
+    said = [(round(e.time, 1), e.source, e.what) for e in health_events(history(rows))
+            if e.source == "gps_vz" or e.what == FALLBACK]
+    assert said == [(0.1, "gps_vz", ISOLATED), (0.3, "gps_vz", READMITTED)]

@@ -72,8 +72,9 @@ class SourceBit(IntEnum):
     REJECTED = 1
     """The source's last sample was rejected by its gate."""
     ISOLATED = 2
-    """The height source is declared faulty: rejected for ``reset_timeout`` while another
-    height source that pins the height tighter was fused (height sources only)."""
+    """The source is declared faulty: a height source rejected for ``reset_timeout`` while
+    another height source that pins the height tighter was fused, or (AltitudeEKF) any
+    source whose reading is stuck (:mod:`~altfusion.estimators.stuck`)."""
     NOISE_INFLATED = 3
     """The source's stated noise is found too small for its innovations and its variance
     inflated more than fourfold (the sources of :data:`NOISE_CHECKED` only;
@@ -95,8 +96,6 @@ def status_bits() -> dict[str, int]:
 
 def _applies(bit: SourceBit, source: str) -> bool:
     """True if ``source`` can set ``bit``."""
-    if bit is SourceBit.ISOLATED:
-        return source in HEIGHT_SOURCES
     if bit is SourceBit.NOISE_INFLATED:
         return source in NOISE_CHECKED
     return True
