@@ -9,6 +9,7 @@ from altfusion.estimators.kalman import (
     constant_states_noise,
     predict,
     predict_constant_acceleration,
+    rederive,
     reset_state,
     scalar_gate,
     update,
@@ -108,6 +109,21 @@ def test_reset_state_sets_one_component_uncorrelated():
     assert P_new[1, 1] == 0.5 and np.count_nonzero(P_new[1]) == np.count_nonzero(P_new[:, 1]) == 1
     others = [0, 2, 3]
     assert np.array_equal(P_new[np.ix_(others, others)], P[np.ix_(others, others)])
+
+
+def test_a_rederived_state_has_the_covariance_of_its_linear_map():
+    """x_2 := 1.5 x_0 - 0.2 x_1 + e, Var(e) = 0.3: the covariance is A P Aᵀ + 0.3 e₂e₂ᵀ, A the
+    identity with row 2 replaced by H; the other states' block unchanged."""
+    P = _random_covariance(np.random.default_rng(17), 4)
+    H = ((0, 1.5), (1, -0.2))
+    A = np.eye(4)
+    A[2] = [1.5, -0.2, 0.0, 0.0]
+    expected = A @ P @ A.T
+    expected[2, 2] += 0.3
+    P_new = [list(row) for row in P]
+    rederive(P_new, 2, H, 0.3)
+    assert np.allclose(P_new, expected, rtol=1e-12, atol=1e-12)
+    assert np.array_equal(np.array(P_new), np.array(P_new).T)
 
 
 def test_scalar_component_updates_one_by_one_are_the_joint_matrix_update():

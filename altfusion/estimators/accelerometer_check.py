@@ -200,10 +200,11 @@ class AccelerometerCheck:
         self.suspect = now <= self._suspect_until
         if len(self._differences) == SCATTER_SAMPLES:
             self.scatter = scatter_noise(self._differences)
-            if self.measured:                       # the typical start is no evidence
-                first = self.stated == self._inflated == self.noise
-                self.stated = min(max(self.scatter, self.floor), ACC_CLIP)
-                self._inflated = self.stated if first else max(self._inflated, self.stated)
+            if self.measured:         # the base follows the scatter, a noise at the base too
+                base = min(max(self.scatter, self.floor), ACC_CLIP)
+                self._inflated = base if self._inflated == self.stated \
+                    else max(self._inflated, base)
+                self.stated = base
         if self.fraction > FRACTION and now - self._escalated >= ESCALATION:
             self._inflated, self._escalated = min(GROWTH * self.noise, ACC_CLIP), now
         elif self._inflated != self.stated:

@@ -91,6 +91,7 @@ FUSED = Verdict.FUSED
 """:attr:`Verdict.FUSED` as a module constant, for the per-sample paths: an enum member read
 through its class takes the metaclass's slow attribute lookup (~0.1 µs), a global does not."""
 
+
 class AidSource:
     """The state of one source (``baro``, ``gps``, ``radar``, ``laser``, ``gps_vz``,
     ``acc``) of an estimator: its last sample's gating, its counters and its health."""
@@ -130,9 +131,9 @@ class AidSource:
         self.biased = False
         """The last bias test found the source biased (the test's hysteresis)."""
         self.noisy = False
-        """Its noise check finds its noise well above the stated
+        """Its noise is still being learnt, found well above the stated or not stated
         (:mod:`~altfusion.estimators.noise_check`): its rejections may be its noise's, so it
-        is not isolated for them."""
+        is neither isolated nor rejected by the bias test for them."""
         self.bits = 0
         """This source's bits of ``status``."""
 

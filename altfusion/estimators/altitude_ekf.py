@@ -80,7 +80,13 @@ from altfusion.errors import ParameterError
 from altfusion.estimators.aid_source import FUSED
 from altfusion.estimators.base import MAX_DELAY, Estimator, HealthParams, Verdict
 from altfusion.estimators.health import NOISE_CHECKED, STEP_BITS, UNKNOWN_STD
-from altfusion.estimators.kalman import quadratic_form, shift_state, update_scalar
+from altfusion.estimators.kalman import (
+    decorrelate,
+    quadratic_form,
+    rederive,
+    shift_state,
+    update_scalar,
+)
 from altfusion.estimators.noise_check import NoiseCheck
 from altfusion.estimators.process_noise import MotionNoise, maximum_scale
 from altfusion.estimators.range_aid import RangeAid
@@ -231,7 +237,7 @@ class AltitudeEKF(Estimator):
                                  f"must be one of {', '.join(HEIGHT_REFERENCES)}")
         stated = {source: getattr(p, f"{source}_noise") for source in TYPICAL_NOISE}
         self.sensor_noise = {source: value or TYPICAL_NOISE[source]
-                      for source, value in stated.items()}
+                             for source, value in stated.items()}
         """Each source's noise, 1σ: the stated one, or the typical one where none is."""
         self.noise_stated = {source: value > 0.0 for source, value in stated.items()}
         """Whether the user stated each source's noise (else it is measured)."""
@@ -572,18 +578,13 @@ class AltitudeEKF(Estimator):
         self._range_rejected_since.pop(source)
         self.x[T] -= y
         if p.height_ref == "range":
-            self.P = [[0.0 if (i == T) or (j == T) else pij for j, pij in enumerate(row)]
-                      for i, row in enumerate(self.P)]
+            decorrelate(self.P, T, 0.0)
         else:
-            P = self.P
-            cross = [sum(c * P[i][j] for i, c in row_h) for j in range(N)]
-            for j in range(N):
-                P[T][j] = P[j][T] = cross[j]
-            P[T][T] = quadratic_form(P, row_h) + R
+            rederive(self.P, T, row_h, R)
         self.n_terrain_resets += 1
-        for name, check in self.noise_checks.items():   # both rangefinders' predictions
-            if name in ("radar", "laser"):
-                check.forget()
+        for name, _ in RANGEFINDERS:                     # both rangefinders' predictions moved
+            if name in self.noise_checks:
+                self.noise_checks[name].forget()
         self.note(f"{source}: inconsistent for {p.reset_timeout:g} s while the height is "
                   f"aided: terrain reset by {-y:.3g} m")
         self.accept(self.aid[source])

@@ -200,6 +200,17 @@ def decorrelate(P, index: int, variance: float) -> None:
     P[index][index] = variance
 
 
+def rederive(P, index: int, H: Sequence[tuple[int, float]], variance: float) -> None:
+    """In place: state ``index`` of covariance P re-derived as the sparse combination H x of
+    the other states (H does not involve ``index``) plus an independent error of
+    ``variance`` (a reset onto a measurement of a difference of states):
+    Cov(x_index, x) = P Hᵀ and Var(x_index) = H P Hᵀ + variance."""
+    cross = _times_row(P, H)
+    for j, c in enumerate(cross):
+        P[index][j] = P[j][index] = c
+    P[index][index] = sparse_dot(cross, H) + variance
+
+
 def update_state_component(x: Vector, P: Matrix, index: int, z: float, variance: float,
                            ) -> tuple[Vector, Matrix, float, float]:
     """:func:`update` for one direct measurement z of x[index] with variance R (H = a row of

@@ -100,7 +100,6 @@ MIN_PAIRS = 20
 exceeds 4 with the probability of χ² with 20 degrees of freedom beyond 80, 10⁻⁸ (the
 first pairs alone would flag a source as told once in 22: χ² with one degree beyond 4)."""
 
-
 UNSTATED_RANGE = 100.0
 """A noise not stated is learnt within this factor either way of its typical value (σ; its
 variance within the square): from a small UAV's typical sensors to the 20-70 m baro and GNSS
@@ -156,7 +155,7 @@ class NoiseCheck:
         averaged = min(self.pairs, self.window)
         self.ratio += (pair * self.factor - self.ratio) / averaged
         if self.stated:
-            self.factor = min(max(self.ratio, 1.0), self.maximum)
+            self.factor = min(max(self.ratio, self.minimum), self.maximum)
             self.source.mark_inflated(self.factor > FLAGGED and self.pairs >= MIN_PAIRS)
             self.source.noisy = self.ratio > NOISY and self.pairs < self.window
         else:
