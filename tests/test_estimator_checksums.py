@@ -229,10 +229,10 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'estimator': '525d13579af2ee59',
     },
     ('yang2020_altitude_ekf', True): {
-        'estimator': '2ba94f528a12bf77',
+        'estimator': '11012eaae7bcdb9e',
     },
     ('yang2020_altitude_ekf', False): {
-        'estimator': '4bfcf071f124abdb',
+        'estimator': 'd3f325c3a178f157',
     },
     ('xu2016_hover15', True): {
         'estimator': '0571cc41b072e0e7',

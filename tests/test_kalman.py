@@ -7,6 +7,8 @@ from hypothesis import strategies as st
 
 from altfusion.estimators.kalman import (
     constant_states_noise,
+    inflate_along,
+    move_datum,
     predict,
     predict_constant_acceleration,
     rederive,
@@ -124,6 +126,37 @@ def test_a_rederived_state_has_the_covariance_of_its_linear_map():
     rederive(P_new, 2, H, 0.3)
     assert np.allclose(P_new, expected, rtol=1e-12, atol=1e-12)
     assert np.array_equal(np.array(P_new), np.array(P_new).T)
+
+
+def test_a_moved_datum_has_the_covariance_of_its_linear_map():
+    """x_0 set onto a sample of variance 0.4, x_1 and x_3 moved with it by u = (1, 1, 0, -1):
+    the covariance is A P Aᵀ + 0.4 u uᵀ with A = I - u e₀ᵀ (the old error of x_0 forgotten,
+    x_1 - x_0 and x_3 + x_0 keeping theirs), x_2 untouched; exactly symmetric."""
+    P = _random_covariance(np.random.default_rng(23), 4)
+    u = np.array([1.0, 1.0, 0.0, -1.0])
+    A = np.eye(4) - np.outer(u, np.eye(4)[0])
+    expected = A @ P @ A.T + 0.4 * np.outer(u, u)
+    P_new = [list(row) for row in P]
+    move_datum(P_new, 0, list(u), 0.4)
+    assert np.allclose(P_new, expected, rtol=1e-12, atol=1e-12)
+    assert np.array_equal(np.array(P_new), np.array(P_new).T)
+    assert P_new[0][0] == pytest.approx(0.4)
+    d = np.array([-1.0, 1.0, 0.0, 0.0])                         # x_1 - x_0: kept
+    assert d @ np.array(P_new) @ d == pytest.approx(d @ P @ d, rel=1e-12)
+    assert P_new[2] == pytest.approx(list(P[2] - P[0][2] * u), rel=1e-12)
+
+
+def test_an_inflation_along_a_direction_leaves_the_orthogonal_combinations():
+    """P + 2.5 u uᵀ: the variance of x_0 grows by 2.5, that of x_0 - x_1
+    (u = (1, 1, 0)) does not, and x_2 is untouched."""
+    P = _random_covariance(np.random.default_rng(29), 3)
+    u = [1.0, 1.0, 0.0]
+    P_new = [list(row) for row in P]
+    inflate_along(P_new, u, 2.5)
+    assert np.allclose(P_new, P + 2.5 * np.outer(u, u), rtol=1e-12, atol=1e-12)
+    d = np.array([1.0, -1.0, 0.0])
+    assert d @ np.array(P_new) @ d == pytest.approx(d @ P @ d, rel=1e-12)
+    assert P_new[2] == list(P[2])
 
 
 def test_scalar_component_updates_one_by_one_are_the_joint_matrix_update():

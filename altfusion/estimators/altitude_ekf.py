@@ -59,7 +59,10 @@ Deviations from PX4 EKF2 (reasons in docs/altitude_ekf.md):
   it too small (xu2016's bounded adaptation, on innovation differences:
   :mod:`~altfusion.estimators.noise_check`); EKF2 has none. A noise not stated (its
   ``<source>_noise`` 0, the default) is measured instead, both ways, from
-  :data:`TYPICAL_NOISE` (EKF2 uses its default noises as they are);
+  :data:`TYPICAL_NOISE` (EKF2 uses its default noises as they are); a rise of the height
+  reference's factor raises the datum's variance with it (:meth:`_datum_follows_noise`);
+* a filter started by another source moves its datum onto a disagreeing first sample of the
+  reference, the height taking that sample's variance (EKF2 starts on its reference);
 * a terrain reset takes the height's error and the sample's noise (EKF2's
   ``resetTerrainToRng`` sets the range noise alone, right against its local origin, not
   against a GNSS datum);
@@ -82,6 +85,8 @@ from altfusion.estimators.base import MAX_DELAY, Estimator, HealthParams, Verdic
 from altfusion.estimators.health import NOISE_CHECKED, STEP_BITS, UNKNOWN_STD
 from altfusion.estimators.kalman import (
     decorrelate,
+    inflate_along,
+    move_datum,
     quadratic_form,
     rederive,
     shift_state,
@@ -507,15 +512,15 @@ class AltitudeEKF(Estimator):
         return h_s, list(row_h)
 
     def _fuse_height(self, source: str, z: float, stamp: float, sigma: float) -> None:
+        R = sigma * sigma * self._adaptation(source)
         if not self.started:
-            self._start(source, z, sigma)
+            self._start(source, z, R)
             return
-        if self._first_sample(source, z, sigma):
+        if self._first_sample(source, z, R):
             return
         h_s, _, row_h, _ = self._back(stamp)
         predicted, row = self._model(source, h_s, row_h)
         y = z - predicted
-        R = sigma * sigma * self._adaptation(source)
         if source == "baro":
             y = self._ground_effect(y)
         S = quadratic_form(self.P, row) + R
@@ -528,12 +533,13 @@ class AltitudeEKF(Estimator):
         elif self._reference_first(y, S):
             self._fuse_height(source, z, stamp, sigma)     # sets its offset anew
             return
-        if not self._gate_checked(source, y, S):
-            return
-        self._range_rejected_since.pop(source, None)
+        if self._gate_checked(source, y, S):
+            self._range_rejected_since.pop(source, None)
+            if source == self._reference:
+                self._reference_rejected_since = None
+            self.x, self.P, _ = update_scalar(self.x, self.P, row, y, R)
         if source == self._reference:
-            self._reference_rejected_since = None
-        self.x, self.P, _ = update_scalar(self.x, self.P, row, y, R)
+            self._datum_follows_noise()
 
     def _fuse_speed(self, vz: float, stamp: float) -> None:
         _, v_s, _, delta = self._back(stamp)
@@ -626,7 +632,7 @@ class AltitudeEKF(Estimator):
         z, stamp, sigma = self._reference_sample
         h_s, _, row_h, _ = self._back(stamp)
         predicted, row = self._model(self._reference, h_s, row_h)
-        S_ref = sum(c * sum(c2 * self.P[i][j] for j, c2 in row) for i, c in row) + sigma**2
+        S_ref = quadratic_form(self.P, row) + sigma * sigma * self._adaptation(self._reference)
         self._reset_to_reference(z - predicted, S_ref)
         return True
 
@@ -661,11 +667,10 @@ class AltitudeEKF(Estimator):
             return None
         return D if source == "baro" else G
 
-    def _start(self, source: str, z: float, sigma: float) -> None:
-        """The first height sample starts the filter: h = z less the source's offset (its
-        prior), with the offset's prior variance in Var h and their correlation."""
+    def _start(self, source: str, z: float, R: float) -> None:
+        """The first height sample (of variance R) starts the filter: h = z less the source's
+        offset (its prior), with the offset's prior variance in Var h and their correlation."""
         x, P = self.x, self.P
-        R = sigma * sigma
         offset = self._offset_index(source)
         x[H] = z
         P[H][H] = R
@@ -685,7 +690,7 @@ class AltitudeEKF(Estimator):
         self.started = True
         self.accept(self.aid[source])
 
-    def _first_sample(self, source: str, z: float, sigma: float) -> bool:
+    def _first_sample(self, source: str, z: float, R: float) -> bool:
         """The first sample of the reference after a start from another source: see
         :meth:`_first_reference`. The first sample of the source of an offset state (d, g
         or the rangefinders' t) that disagrees with the state's prior (``P0_offset``,
@@ -696,7 +701,7 @@ class AltitudeEKF(Estimator):
         disagrees with the prior, else the prior itself. True if consumed."""
         if source == self._reference and not self._reference_seen:
             self._reference_seen = True
-            return self._first_reference(z, sigma)
+            return self._first_reference(z, R)
         index = self._offset_index(source)
         if index == T and not self._terrain_known:
             self._terrain_known = True
@@ -707,8 +712,7 @@ class AltitudeEKF(Estimator):
         value = self.x[H] - z if index == T else z - self.x[H]
         sigmas = self.params.gate_sigma
         y = value - self.x[index]                         # against the state's prior
-        consistent = y * y <= sigmas * sigmas * (self.P[index][index] + self.P[H][H]
-                                                 + sigma * sigma)
+        consistent = y * y <= sigmas * sigmas * (self.P[index][index] + self.P[H][H] + R)
         frozen = index == T and self.params.height_ref == "range"
         if consistent and not frozen:
             return False                                  # fused as any sample
@@ -717,32 +721,55 @@ class AltitudeEKF(Estimator):
         if consistent:
             return False                                  # the datum: its prior
         self.x[index] = value
-        self.P[index][index] = 0.0 if frozen else self.P[H][H] + sigma * sigma
+        self.P[index][index] = 0.0 if frozen else self.P[H][H] + R
         self.accept(self.aid[source])
         return True
 
-    def _first_reference(self, z: float, sigma: float) -> bool:
-        """The reference's first sample after a start from another source sets the datum:
-        if it disagrees with the height (beyond the gate), h moves onto it and d and t move
-        with it, so that the other sources' predictions stay where they were (a lidar at
-        0 m, then GNSS at 429 m MSL: the terrain becomes 429 m - range); the sample is then
-        fused as any other (so its information reaches the terrain through h). Returns
-        False: the sample is never consumed."""
+    def _first_reference(self, z: float, R: float) -> bool:
+        """The reference's first sample (of variance R) after a start from another source sets
+        the datum: if it disagrees with the height (beyond the gate), h moves onto it and d
+        and t move with it, so that the other sources' predictions stay where they were (a
+        lidar at 0 m, then GNSS at 429 m MSL: the terrain becomes 429 m - range). The height's
+        error is then the sample's (variance R, its old error forgotten) and the moved
+        states keep their errors relative to it (:func:`~altfusion.estimators.kalman.
+        move_datum`); the sample is consumed. One that agrees is fused as any sample. True
+        if consumed."""
         h_s, _, row_h, _ = self._back(self.time)
         predicted, row = self._model(self._reference, h_s, row_h)
         y = z - predicted
-        S = sum(c * sum(c2 * self.P[i][j] for j, c2 in row) for i, c in row) + sigma**2
+        S = quadratic_form(self.P, row) + R
         if y * y <= self.params.gate_sigma**2 * S:
             return False
-        self.x[H] += y
-        self.x[T] += y
+        direction = self._datum_direction()
+        self.x = [xi + ui * y for xi, ui in zip(self.x, direction, strict=True)]
+        move_datum(self.P, H, direction, R)
+        self.note(f"{self._reference}: first sample of the height reference {y:.4g} m from "
+                  f"the height: datum moved onto it")
+        self.accept(self.aid[self._reference])
+        return True
+
+    def _datum_direction(self) -> list[float]:
+        """u: how the states move with the datum (h and t by +1, the offsets d and g of the
+        sources other than the reference by -1): x + u·δ predicts every source's reading as x
+        does, but the reference's, which moves by δ."""
+        direction = [0.0] * N
+        direction[H] = direction[T] = 1.0
         for source in ("baro", "gps"):
             offset = self._offset_index(source)
             if offset is not None:
-                self.x[offset] -= y
-        self.note(f"{self._reference}: first sample of the height reference {y:.4g} m from "
-                  f"the height: datum moved onto it")
-        return False                                      # then fused, in agreement
+                direction[offset] = -1.0
+        return direction
+
+    def _datum_follows_noise(self) -> None:
+        """The reference's noise check raised its factor above its earlier peak by r: the
+        datum, which its samples taught, is that much less certain: Var h ← r·Var h along
+        the datum direction (:func:`~altfusion.estimators.kalman.inflate_along`), every
+        difference the other sources see unchanged. (A noise stated x0.2 or not stated
+        would otherwise leave the first samples' average, weighted as precise, with an
+        ``h_std`` of the stated noise for minutes.)"""
+        check = self.noise_checks.get(self._reference)
+        if check is not None and check.rise > 1.0:
+            inflate_along(self.P, self._datum_direction(), (check.rise - 1.0) * self.P[H][H])
 
     def reset_height(self, source: str, innovation: float, variance: float) -> None:
         """Height (or, for the GNSS speed, the speed) onto the sample; its variance the

@@ -211,6 +211,32 @@ def rederive(P, index: int, H: Sequence[tuple[int, float]], variance: float) -> 
     P[index][index] = sparse_dot(cross, H) + variance
 
 
+def move_datum(P, index: int, direction: Sequence[float], variance: float) -> None:
+    """In place: state ``index`` set onto a new value of independent error of ``variance``,
+    the states moved along with it by ``direction`` (u, u[index] = 1: x ← x + u·y keeps
+    every difference the measurements see) keeping their errors relative to it, the error
+    of its old value forgotten (a datum moved onto one sample):
+
+        P ← A P Aᵀ + variance·u uᵀ,   A = I - u e_indexᵀ,
+        P_ab ← P_ab - (u_a P_index,b + u_b P_index,a) + u_a u_b (P_index,index + variance)
+    """
+    row = P[index][:]
+    base = row[index] + variance
+    for a, u_a in enumerate(direction):
+        P_a = P[a]
+        for b, u_b in enumerate(direction):
+            P_a[b] = P_a[b] - (u_a * row[b] + u_b * row[a]) + u_a * u_b * base
+
+
+def inflate_along(P, direction: Sequence[float], variance: float) -> None:
+    """In place: P ← P + variance·u uᵀ, an independent error of ``variance`` added along
+    ``direction`` u (every combination orthogonal to u keeps its variance)."""
+    for P_a, u_a in zip(P, direction, strict=True):
+        if u_a:
+            for b, u_b in enumerate(direction):
+                P_a[b] += variance * u_a * u_b
+
+
 def update_state_component(x: Vector, P: Matrix, index: int, z: float, variance: float,
                            ) -> tuple[Vector, Matrix, float, float]:
     """:func:`update` for one direct measurement z of x[index] with variance R (H = a row of

@@ -40,6 +40,10 @@ Deviations from xu2016 (which uses the mean of y²/S itself):
 * each pair's ratio is clipped at :data:`CLIP`, so that one wild sample within the gate
   moves m by at most CLIP/window (once the window is full);
 * the flag waits for :data:`MIN_PAIRS` pairs;
+* the factor's rise above its earlier peak is told (:attr:`NoiseCheck.rise`): the samples
+  fused before were weighted as that much more precise than they were, and the estimator
+  raises what they taught it by as much (AltitudeEKF: the datum's variance, for its height
+  reference);
 * a source whose noise is found well above the stated (:data:`NOISY`) is neither isolated
   nor rejected by the bias test of the fault layer (a biased source told right is) during
   its first ``window`` pairs, while its noise is being learnt; after them its gate and bias
@@ -116,7 +120,7 @@ class NoiseCheck:
     """The noise factor of one source: :attr:`factor` multiplies its stated variance R."""
 
     __slots__ = ("source", "window", "maximum", "minimum", "stated", "ratio", "factor",
-                 "pairs", "_last")
+                 "peak", "rise", "pairs", "_last")
 
     def __init__(self, source: AidSource, window: float, maximum: float,
                  stated: bool = True) -> None:
@@ -134,6 +138,12 @@ class NoiseCheck:
         """m: the windowed estimate of the true noise variance over the stated one."""
         self.factor = 1.0 if stated else UNSTATED_START
         """f: the factor on the stated variance in use."""
+        self.peak = self.factor
+        """The largest factor so far."""
+        self.rise = 1.0
+        """The ratio by which the last gated sample took the factor above its earlier peak
+        (1: not above): the samples fused before were weighted as if that much more precise,
+        and what they taught the filter is that much less certain."""
         self.pairs = 0
         """n: the pairs of innovations taken so far."""
         self._last: tuple[float, float] | None = None
@@ -142,6 +152,7 @@ class NoiseCheck:
     def gated(self, innovation: float, variance: float) -> None:
         """A sample of innovation y and variance S (with the present factor) was gated, fused
         or rejected: update the ratio and the factor from it and the previous one."""
+        self.rise = 1.0
         last = self._last
         self._last = (innovation, variance)
         if last is None:
@@ -162,6 +173,8 @@ class NoiseCheck:
             bound = self.ratio * (1.0 + 2.0 * math.sqrt(2.0 / averaged))
             self.factor = min(max(bound, self.factor / FALL, self.minimum), self.maximum)
             self.source.noisy = self.pairs < self.window
+        if self.factor > self.peak:
+            self.rise, self.peak = self.factor / self.peak, self.factor
 
     def forget(self) -> None:
         """The next sample starts a new pair (after a reset, a re-referencing or a gap)."""
