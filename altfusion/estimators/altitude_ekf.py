@@ -533,7 +533,7 @@ class AltitudeEKF(Estimator):
         elif self._reference_first(y, S):
             self._fuse_height(source, z, stamp, sigma)     # sets its offset anew
             return
-        if self._gate_checked(source, y, S):
+        if self._gate_checked(source, y, S, R):
             self._range_rejected_since.pop(source, None)
             if source == self._reference:
                 self._reference_rejected_since = None
@@ -550,7 +550,7 @@ class AltitudeEKF(Estimator):
         y = vz - v_s
         S = self.P[V][V] + (2.0 * delta * self.P[V][BA] + delta * delta * self.P[BA][BA]
                             if len(row) > 1 else 0.0) + R
-        if self._gate_checked("gps_vz", y, S):
+        if self._gate_checked("gps_vz", y, S, R):
             self.x, self.P, _ = update_scalar(self.x, self.P, row, y, R)
 
     def _ground_effect(self, y: float) -> float:
@@ -646,13 +646,14 @@ class AltitudeEKF(Estimator):
         check = self.noise_checks.get(source)
         return 1.0 if check is None else check.factor
 
-    def _gate_checked(self, source: str, y: float, S: float) -> bool:
-        """The gate of ``source`` (True: fused), its noise check told the verdict."""
+    def _gate_checked(self, source: str, y: float, S: float, R: float) -> bool:
+        """The gate of ``source`` (True: fused), its noise check told the verdict (and the
+        sample's noise variance R)."""
         verdict = self.gate(self.aid[source], y, S, self.params.gate_sigma)
         check = self.noise_checks.get(source)
         if check is not None:
             if verdict in (Verdict.FUSED, Verdict.REJECTED):
-                check.gated(y, S)
+                check.gated(y, S, R)
             else:
                 check.forget()
         return verdict is FUSED

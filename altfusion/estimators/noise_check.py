@@ -59,14 +59,33 @@ the typical value:
   noisier than typical would otherwise have its first samples taken as precise, and they
   would weigh in the estimate for minutes (measured: a 30 m GNSS started at 3 m kept the
   height 15 m off after 10 s, 6 m after 40 s);
-* the factor in use is the upper bound of m's two-standard-error confidence interval,
-  m·(1 + 2·√(2/min(n, window))) (m averages about min(n, window) χ² ratios of one degree),
-  and falls by at most :data:`FALL` per pair: a noise known from a few pairs only is not
-  yet trusted to be small (the first pair's ratio is below a tenth of the true one once in
-  four);
+* the factor in use is the upper bound of m's one-sided :data:`CONFIDENCE` interval,
+  m·k/χ²_k(1 - CONFIDENCE) with k = min(n, 2·window - 1) the degrees of freedom of m (the
+  mean of n χ² ratios of one degree; the exponential window's average has about
+  2·window - 1 once full, and this takes them from n = window on: slightly too few
+  pairs' worth of caution in between), :func:`upper_bound_factor`, and falls by at most
+  :data:`FALL` per pair: a noise known from a few pairs only is not yet trusted to be small
+  (the mean of 4 ratios is below a third of the true one once in 7, and was so on the
+  3 m GNSS of one xu2016_hover15 run: taken as 1.4 m, the height 5 m off under an
+  ``h_std`` of 1.2 m, with the bound m·(1 + 2·√(2/n)) used before, 2.4 m at four pairs
+  against the interval's 8.3);
 * it is never flagged (there is no statement to be wrong), and it is ``noisy`` (spared by
   the fault layer) only until its first ``window`` pairs are in: until then its gate and
-  bias test are not yet sized by its noise.
+  bias test are not yet sized by its noise;
+* a pair's ratio is taken against the two samples' typical noise variances (R without the
+  factor, which changes from pair to pair while the noise is measured), ρ_k = (y_k -
+  y_(k-1))² / (R_k + R_(k-1)) clipped at CLIP·f, and m ← m + (ρ_k - m)/min(n, window); not
+  against S_k + S_(k-1):
+  Mehra's E[(y_k - y_(k-1))²] = S_k + S_(k-1) holds for a consistent filter only, and one
+  whose prediction is far less certain than its noise (its start, an offset not yet learnt)
+  sees the same prediction error in successive innovations, which cancels in their
+  difference while S counts it twice: the ratio then reads far too small, and a noise not
+  stated would be taken down to a fraction of its value within a few pairs (measured: the
+  3 m GNSS of xu2016_hover15 taken as 1.4 m after 1.4 s, the height 5 m off under an
+  ``h_std`` of 1.2 m). Against R alone the ratio errs the other way when the prediction
+  moves between two samples by more than their noise (a manoeuvre), which only makes the
+  noise larger: the safe side for a noise measured both ways. A stated noise, never
+  deflated, keeps S (the flag must not be set by a manoeuvre).
 
 A stated noise is never deflated: a sensor whose errors are correlated in time (a GNSS)
 scatters less from sample to sample than its datasheet's σ, which is the honest figure for
@@ -74,6 +93,8 @@ the filter.
 """
 
 import math
+from functools import cache
+from statistics import NormalDist
 
 from altfusion.estimators.aid_source import AidSource
 
@@ -115,6 +136,28 @@ UNSTATED_START = 100.0
 FALL = 4.0
 """The factor of a noise not stated falls by at most this ratio per pair."""
 
+CONFIDENCE = 0.975
+"""One-sided confidence that the true variance of a noise not stated is below the one in use
+(the two-standard-error bound of a normal estimate)."""
+
+
+@cache
+def upper_bound_factor(dof: int) -> float:
+    """k/χ²_k(1 - CONFIDENCE): the factor from the mean m of k χ² ratios of one degree to the
+    upper bound of the true ratio's one-sided CONFIDENCE interval (1018 for k = 1, 39.5 for
+    2, 3.08 for 10, 1.23 for 199). χ²_1 and χ²_2 exact, Wilson-Hilferty's cube above (for
+    k = 3 its quantile is 16 % low, a bound 19 % wide, the cautious side; within 5 % from
+    k = 5 on); no scipy inside an FMU, which runs in the host's Python."""
+    tail = 1.0 - CONFIDENCE
+    if dof == 1:
+        quantile = NormalDist().inv_cdf(0.5 + tail / 2.0) ** 2
+    elif dof == 2:
+        quantile = -2.0 * math.log1p(-tail)
+    else:
+        spread = 2.0 / (9.0 * dof)
+        quantile = dof * (1.0 - spread + NormalDist().inv_cdf(tail) * math.sqrt(spread)) ** 3
+    return dof / quantile
+
 
 class NoiseCheck:
     """The noise factor of one source: :attr:`factor` multiplies its stated variance R."""
@@ -149,32 +192,47 @@ class NoiseCheck:
         self._last: tuple[float, float] | None = None
         """(y, S) of the source's previous gated sample; None after a reset."""
 
-    def gated(self, innovation: float, variance: float) -> None:
-        """A sample of innovation y and variance S (with the present factor) was gated, fused
-        or rejected: update the ratio and the factor from it and the previous one."""
+    def gated(self, innovation: float, variance: float, noise: float) -> None:
+        """A sample of innovation y, variance S and noise variance R (both with the present
+        factor) was gated, fused or rejected: update the ratio and the factor from it and the
+        previous one (a stated noise is judged against S, one not stated against R)."""
         self.rise = 1.0
-        last = self._last
-        self._last = (innovation, variance)
-        if last is None:
-            return
-        total = variance + last[1]
-        if not total > 0.0 or not math.isfinite(total):
-            return
-        difference = innovation - last[0]
-        pair = min(difference * difference / total, CLIP)
-        self.pairs += 1
-        averaged = min(self.pairs, self.window)
-        self.ratio += (pair * self.factor - self.ratio) / averaged
         if self.stated:
+            pair = self._pair(innovation, variance, CLIP)
+            if pair is None:
+                return
+            self.ratio += (pair * self.factor - self.ratio) / min(self.pairs, self.window)
             self.factor = min(max(self.ratio, self.minimum), self.maximum)
             self.source.mark_inflated(self.factor > FLAGGED and self.pairs >= MIN_PAIRS)
             self.source.noisy = self.ratio > NOISY and self.pairs < self.window
         else:
-            bound = self.ratio * (1.0 + 2.0 * math.sqrt(2.0 / averaged))
+            # against each sample's R without the factor (it changes from pair to pair while
+            # the noise is measured), clipped as the stated pairs are against f·R
+            pair = self._pair(innovation, noise / self.factor, CLIP * self.factor)
+            if pair is None:
+                return
+            self.ratio += (pair - self.ratio) / min(self.pairs, self.window)
+            bound = self.ratio * upper_bound_factor(min(self.pairs,
+                                                         2 * math.ceil(self.window) - 1))
             self.factor = min(max(bound, self.factor / FALL, self.minimum), self.maximum)
             self.source.noisy = self.pairs < self.window
         if self.factor > self.peak:
             self.rise, self.peak = self.factor / self.peak, self.factor
+
+    def _pair(self, innovation: float, variance: float, clip: float) -> float | None:
+        """(y_k - y_(k-1))² over the sum of the two samples' ``variance``, at most ``clip``,
+        counted in :attr:`pairs`; None without a previous sample (or a variance that is not
+        a positive number)."""
+        last = self._last
+        self._last = (innovation, variance)
+        if last is None:
+            return None
+        total = variance + last[1]
+        if not total > 0.0 or not math.isfinite(total):
+            return None
+        difference = innovation - last[0]
+        self.pairs += 1
+        return min(difference * difference / total, clip)
 
     def forget(self) -> None:
         """The next sample starts a new pair (after a reset, a re-referencing or a gap)."""
