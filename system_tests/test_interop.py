@@ -1,7 +1,10 @@
 """Our FMUs and SSP systems in third-party engines: libcosim, ECOS, an FMU container.
 
-Every third-party run happens in a fresh Python process (engines unload FMU libraries, which
-pythonfmu does not survive twice in one process). The reference for the engines is our runner
+Third-party runs happen outside the test process, one Python process per engine running every
+system the selected tests need one after another (engines unload FMU libraries; the native
+shim makes a process survive that, as test_engines_all_systems.py shows); a run that fails
+there is repeated alone in a fresh process. Our runner runs in the test process. The
+reference for the engines is our runner
 with ``master="jacobi"``: libcosim and ECOS are Jacobi masters, and running the same FMU code
 on the same inputs they must agree with it bit for bit. Our default ordered stepping differs
 from Jacobi by derived amounts, asserted below.
@@ -267,6 +270,22 @@ def test_libcosim_reproduces_the_jacobi_reference_bit_for_bit(engine_runs, syste
     outputs when a step completes: exactly ``master="jacobi"``."""
     _assert_identical(engine_runs(system, engine), engine_runs(system, "altfusion-jacobi"),
                       label=engine)
+
+
+def test_libcosim_with_a_stop_time_within_one_output_interval_records_t_0(ssp_files, tmp_path):
+    """A stop time shorter than one output interval records the t = 0 row only, in libcosim
+    as in our runner (libcosim was asked for step(-1), which never returns)."""
+    rows = {}
+    for engine in ("libcosim", "altfusion"):
+        csv = tmp_path / f"{engine}.csv"
+        done = subprocess.run([sys.executable, "-m", "altfusion.interop", "run", "--engine",
+                               engine, "--stop", "0.02", "--csv", str(csv),
+                               str(ssp_files["plant_yang2020"])],
+                              capture_output=True, text=True, timeout=120, cwd=ROOT)
+        assert done.returncode == 0, done.stderr[-2000:]
+        rows[engine] = Results.from_csv(csv)
+    assert len(rows["libcosim"].time) == 1
+    _assert_identical(rows["libcosim"], rows["altfusion"], label="libcosim")
 
 
 ENGINE_ACCURACY_RATIO = 1.5
