@@ -10,11 +10,15 @@ needs Debian's ``valgrind`` and runs ~50x slower than native.
 Two runs of SYSTEM are counted, each after a 2 s warm-up run: one of ``--seconds`` simulated
 seconds and one of 2 s; their difference divided by the base steps between them is the cost
 of a base step with start-up, imports and instantiation removed. ``PYTHONHASHSEED`` is fixed
-so that dictionary layouts repeat.
+so that dictionary layouts repeat, OpenBLAS runs one thread (its idle worker threads' spinning
+was counted too: ±1 % from run to run) and address-space randomization is off where
+``setarch`` can turn it off (hashes of objects follow their addresses): three counts of the
+same process then agreed to 3,000 of 782 million instructions (without: ±5 million).
 """
 
 import argparse
 import os
+import platform
 import re
 import subprocess
 import sys
@@ -37,13 +41,25 @@ with Simulation(build_system({system!r}), fmus, {backend!r}) as simulation:
 """
 
 
+def _setarch_works() -> bool:
+    """Whether ``setarch -R`` (no address-space randomization) runs here."""
+    try:
+        return subprocess.run(["setarch", platform.machine(), "-R", "true"],
+                              capture_output=True).returncode == 0
+    except OSError:
+        return False
+
+
 def instructions(system: str, backend: str, seconds: float) -> int:
     """Instructions of a whole process that warms up and then simulates ``seconds``."""
     code = RUN.format(models=str(MODELS), system=system, backend=backend, warm_up=WARM_UP)
+    no_aslr = ["setarch", platform.machine(), "-R"] if _setarch_works() else []
+    env = {**os.environ, "PYTHONHASHSEED": "0", "OPENBLAS_NUM_THREADS": "1",
+           "OMP_NUM_THREADS": "1"}
     completed = subprocess.run(
-        ["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null",
+        [*no_aslr, "valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null",
          sys.executable, "-c", code, repr(seconds)],
-        capture_output=True, text=True, env={**os.environ, "PYTHONHASHSEED": "0"}, check=True)
+        capture_output=True, text=True, env=env, check=True)
     found = re.search(r"Collected : (\d+)", completed.stderr)
     if found is None:
         raise RuntimeError(f"no instruction count in valgrind's output:\n{completed.stderr}")

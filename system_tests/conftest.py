@@ -32,14 +32,18 @@ def ssp_files(fmus) -> dict[str, Path]:
     return {path.stem: path for path in MODELS.glob("*.ssp")}
 
 
-REPRODUCE_WORKERS = 2
+REPRODUCE_WORKERS = 1
+"""Worker processes of each ``altfusion reproduce`` run: one, since pytest-xdist already keeps
+every core busy (two workers each on CI's two cores only added their start-ups); several
+workers giving the same numbers is test_montecarlo.py's."""
 
 
 @pytest.fixture(scope="session")
 def reproduce_cli(fmus) -> Callable[[str, int, Path, str], str]:
-    """``altfusion reproduce NAME -n RUNS --out OUT`` in a subprocess on the built models, two
-    workers, with ``--paper-algorithm`` for :data:`PAPER_ALGORITHM`; returns its
-    standard output (fails the test with its error output otherwise)."""
+    """``altfusion reproduce NAME -n RUNS --out OUT`` in a subprocess on the built models,
+    :data:`REPRODUCE_WORKERS` workers, with ``--paper-algorithm`` for
+    :data:`PAPER_ALGORITHM`; returns its standard output (fails the test with its error
+    output otherwise)."""
     def run(name: str, runs: int, out: Path, algorithm: str = ALGORITHMS[0]) -> str:
         completed = subprocess.run(
             [sys.executable, "-m", "altfusion.cli", "reproduce", name, "-n", str(runs),

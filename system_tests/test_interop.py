@@ -1,7 +1,10 @@
 """Our FMUs and SSP systems in third-party engines: libcosim, ECOS, an FMU container.
 
-Every third-party run happens in a fresh Python process (engines unload FMU libraries, which
-pythonfmu does not survive twice in one process). The reference for the engines is our runner
+Third-party runs happen outside the test process, one Python process per engine running every
+system the selected tests need one after another (engines unload FMU libraries; the native
+shim makes a process survive that, as test_engines_all_systems.py shows); a run that fails
+there is repeated alone in a fresh process. Our runner runs in the test process. The
+reference for the engines is our runner
 with ``master="jacobi"``: libcosim and ECOS are Jacobi masters, and running the same FMU code
 on the same inputs they must agree with it bit for bit. Our default ordered stepping differs
 from Jacobi by derived amounts, asserted below.
@@ -12,6 +15,7 @@ difference too, give its control loop's extra delay in ``JACOBI_LOOP_DELAY``; to
 its subsystems into a container, add the members to ``CONTAINER_SUBSYSTEMS``.
 """
 
+import json
 import os
 import subprocess
 import sys
@@ -31,7 +35,9 @@ pytest.importorskip("fmu_manipulation_toolbox", reason="the interop extra is not
 
 from altfusion.constants import G0, R_AIR  # noqa: E402
 from altfusion.cosim import simulate, write_ssp  # noqa: E402
+from altfusion.cosim.results import Results  # noqa: E402
 from altfusion.cosim.runner import MASTERS  # noqa: E402
+from altfusion.interop.__main__ import run_engine  # noqa: E402
 from altfusion.interop.compliance import fmu_problems, ssp_problems  # noqa: E402
 from altfusion.interop.container import (  # noqa: E402
     build_container,
@@ -172,14 +178,66 @@ def test_an_osp_folder_is_exported_next_to_every_ssp(ssp_files):
 # ------------------------------------------------------------------------------ engines
 
 
+OUR_ENGINES = ("altfusion", "altfusion-jacobi")
+"""Our runner's engines: run in the test process (``run_engine``, as the engines' entry point
+runs them; the CSV round trip of the others is exact, ``repr`` of every float)."""
+
+ENGINE_BATCH = """
+import atexit, json, sys, traceback
+from pathlib import Path
+from altfusion.cosim.instances import release_mapped_pythonfmu_state
+from altfusion.interop.__main__ import run_engine
+
+atexit.register(release_mapped_pythonfmu_state)
+for job in json.loads(sys.argv[1]):
+    try:
+        run_engine(job["engine"], Path(job["ssp"]), job["stop"], Path(job["osp"])).to_csv(
+            Path(job["csv"]))
+    except Exception:
+        Path(job["csv"] + ".error").write_text(traceback.format_exc())
+"""
+"""One third-party engine's runs of several systems, one after another in one process (what
+test_engines_all_systems.py shows a process survives), each written to its CSV or, when it
+raises, its error to ``<csv>.error``."""
+
+
+def _module_systems(request) -> list[str]:
+    """The catalog systems this module's collected tests run in the engines."""
+    return sorted({item.callspec.params["system"] for item in request.session.items
+                   if item.module is request.module and hasattr(item, "callspec")
+                   and item.callspec.params.get("system") in ENGINE_SYSTEMS})
+
+
 @pytest.fixture(scope="module")
-def engine_runs(ssp_files):
-    """Every engine's run of every system in ENGINE_SYSTEMS, by (system, engine)."""
+def engine_runs(ssp_files, tmp_path_factory, request):
+    """Every engine's run of every system in ENGINE_SYSTEMS, by (system, engine). A
+    third-party engine's first run also runs the other systems this module's tests ask of
+    it, in one process (ENGINE_BATCH); a run that raised there, or that a dying process
+    left undone, is repeated alone in a fresh process (``run_in_subprocess``), whose error
+    the test then sees."""
     cache: dict[tuple[str, str], object] = {}
+    folder = tmp_path_factory.mktemp("engine_runs")
+
+    def batch(first: str, engine: str) -> None:
+        systems = [first, *(s for s in _module_systems(request)
+                            if s != first and (s, engine) not in cache)]
+        jobs = [{"engine": engine, "ssp": str(ssp_files[s]), "stop": engine_run_seconds(s),
+                 "osp": str(MODELS / s), "csv": str(folder / f"{s}.{engine}.csv")}
+                for s in systems]
+        subprocess.run([sys.executable, "-c", ENGINE_BATCH, json.dumps(jobs)],
+                       capture_output=True, text=True, timeout=900 * len(jobs), cwd=ROOT)
+        for system, job in zip(systems, jobs, strict=True):
+            if Path(job["csv"]).is_file():
+                cache[system, engine] = Results.from_csv(Path(job["csv"]))
 
     def get(system: str, engine: str):
         if (system, engine) not in cache:
             stop = engine_run_seconds(system)
+            if engine in OUR_ENGINES:
+                cache[system, engine] = run_engine(engine, ssp_files[system], stop)
+            else:
+                batch(system, engine)
+        if (system, engine) not in cache:
             cache[system, engine] = run_in_subprocess(engine, ssp_files[system], stop,
                                                       osp=MODELS / system)
         return cache[system, engine]
@@ -212,6 +270,22 @@ def test_libcosim_reproduces_the_jacobi_reference_bit_for_bit(engine_runs, syste
     outputs when a step completes: exactly ``master="jacobi"``."""
     _assert_identical(engine_runs(system, engine), engine_runs(system, "altfusion-jacobi"),
                       label=engine)
+
+
+def test_libcosim_with_a_stop_time_within_one_output_interval_records_t_0(ssp_files, tmp_path):
+    """A stop time shorter than one output interval records the t = 0 row only, in libcosim
+    as in our runner (libcosim was asked for step(-1), which never returns)."""
+    rows = {}
+    for engine in ("libcosim", "altfusion"):
+        csv = tmp_path / f"{engine}.csv"
+        done = subprocess.run([sys.executable, "-m", "altfusion.interop", "run", "--engine",
+                               engine, "--stop", "0.02", "--csv", str(csv),
+                               str(ssp_files["plant_yang2020"])],
+                              capture_output=True, text=True, timeout=120, cwd=ROOT)
+        assert done.returncode == 0, done.stderr[-2000:]
+        rows[engine] = Results.from_csv(csv)
+    assert len(rows["libcosim"].time) == 1
+    _assert_identical(rows["libcosim"], rows["altfusion"], label="libcosim")
 
 
 ENGINE_ACCURACY_RATIO = 1.5

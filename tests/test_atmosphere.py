@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from altfusion.physics.atmosphere import H_MAX, H_MIN, Atmosphere, AtmosphereParams
-from altfusion.physics.barometric import height_from_pressure, pressure_at
+from altfusion.physics.barometric import BarometricFormula, height_from_pressure, pressure_at
 
 # ICAO standard atmosphere (geopotential altitude): h m, p Pa, T K, rho kg/m³.
 ISA_TABLE = [
@@ -115,3 +115,15 @@ def test_an_altitude_outside_the_model_is_refused_not_a_nan(h):
     with pytest.raises(ValueError, match="input h = .* outside the model's range"):
         atmosphere.do_step(0.0, 0.01)
     assert math.isfinite(atmosphere.p_static)
+
+
+def test_barometric_formula_is_the_functions_bit_for_bit():
+    """BarometricFormula (a barometer's calibration, constants taken once) gives exactly the
+    floats of pressure_at and height_from_pressure, with a lapse rate and isothermal."""
+    rng = np.random.default_rng(7)
+    for lapse in (-0.0065, 0.003, 0.0, 1e-13):
+        formula = BarometricFormula(95000.0, 280.0, lapse, 450.0)
+        for h in rng.uniform(-500.0, 9000.0, 200).tolist():
+            assert formula.pressure(h) == pressure_at(h, 95000.0, 280.0, lapse, 450.0)
+        for p in rng.uniform(30000.0, 105000.0, 200).tolist():
+            assert formula.height(p) == height_from_pressure(p, 95000.0, 280.0, lapse, 450.0)

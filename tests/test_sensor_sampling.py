@@ -17,6 +17,7 @@ from altfusion.sensors import (
     LaserRangefinder,
     RadioAltimeter,
 )
+from altfusion.sensors.sampling import NORMAL_BATCH, NormalDraws
 
 SENSORS = (AirDataModule, GnssReceiver, Accelerometer, RadioAltimeter, LaserRangefinder)
 
@@ -201,3 +202,16 @@ def test_any_host_step_gives_the_same_samples_and_the_count_rises_by_the_number_
         assert sensor.gps_count == math.floor(time / 0.1 + 1e-9)
         assert (sensor.gps_time, sensor.gps_h) == samples[sensor.gps_count]
     assert sensor.gps_count == 30
+
+
+def test_normal_draws_are_numpys_scalar_draws_bit_for_bit():
+    """NormalDraws hands out exactly the numbers of one standard_normal() call each, across
+    batch boundaries (a batch of 7 here, the sensors' 256) and for several seeds."""
+    for seed in (0, 1, 12345):
+        for batch in (7, NORMAL_BATCH):
+            draws = NormalDraws(np.random.default_rng(seed), batch)
+            scalar = np.random.default_rng(seed)
+            for _ in range(3 * batch + 2):
+                expected = scalar.standard_normal()
+                drawn = draws.draw()
+                assert type(drawn) is float and drawn == expected

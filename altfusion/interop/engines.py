@@ -154,7 +154,9 @@ def run_libcosim(source: Path, system: SystemSpec, fmu_paths: dict[str, Path],
             execution = CosimExecution.from_ssp_file(str(ssd))
     except AssertionError as error:
         raise EngineError(f"libcosim cannot load {source}: {error}") from None
-    steps = (recording.rows - 1) * recording.every
+    # at least the one step that reads the initial values (a stop time within one output
+    # interval records only t = 0; step(-1) would never return)
+    steps = max((recording.rows - 1) * recording.every, 1)
     series = CosimObserver.create_time_series(buffer_size=steps + 1)
     last = CosimObserver.create_last_value()
     execution.add_observer(series)

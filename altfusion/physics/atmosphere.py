@@ -85,6 +85,9 @@ class Atmosphere(Component):
         )
         if p.T0 + p.lapse_rate * ISA_TROPOPAUSE_H <= 0:
             raise ParameterError("lapse_rate", p.lapse_rate, "gives T <= 0 K below 11 km")
+        # The gust's exact discretization over one tick: g <- phi g + gust_std sqrt(1 - phi²) n
+        self._gust_phi = math.exp(-clock.step_size / p.gust_time_constant)
+        self._gust_scale = p.gust_std * math.sqrt(1.0 - self._gust_phi * self._gust_phi)
 
     def reset(self) -> None:
         p = self.params
@@ -105,8 +108,7 @@ class Atmosphere(Component):
                 self._lapse_rng.standard_normal()
             )
         if p.gust_std > 0:
-            phi = math.exp(-self.dt / p.gust_time_constant)
-            self.gust = phi * self.gust + p.gust_std * math.sqrt(1.0 - phi * phi) * (
+            self.gust = self._gust_phi * self.gust + self._gust_scale * (
                 self._gust_rng.standard_normal()
             )
         self._evaluate()
@@ -114,7 +116,8 @@ class Atmosphere(Component):
     def _evaluate(self) -> None:
         """Set every output for the current time and input altitude ``h``."""
         p = self.params
-        drift_time = max(0.0, self.time - p.drift_start_time)
+        now = self.clock.now
+        drift_time = max(0.0, now - p.drift_start_time)
         self.p0_actual = p.p0 + p.p0_rate * drift_time
         self.T0_actual = p.T0 + p.T0_rate * drift_time
         self.p_static, self.T_air = self.static_conditions(self.h)
@@ -123,7 +126,7 @@ class Atmosphere(Component):
         if self._terrain is None:
             self.terrain_h = p.terrain_height
         else:
-            self.terrain_h = float(np.interp(self.time, self._terrain[:, 0], self._terrain[:, 1]))
+            self.terrain_h = float(np.interp(now, self._terrain[:, 0], self._terrain[:, 1]))
 
     def static_conditions(self, h: float) -> tuple[float, float]:
         """(static pressure Pa, temperature K) at altitude h in the current atmosphere."""

@@ -28,7 +28,7 @@ def pressure_at(
     """Static pressure at height h, Pa, for a constant lapse rate (hydrostatic, ideal gas)."""
     if abs(lapse_rate) < 1e-12:
         return p_ref * math.exp(-gravity * (h - h_ref) / (gas_constant * T_ref))
-    T = temperature_at(h, T_ref, lapse_rate, h_ref)
+    T = T_ref + lapse_rate * (h - h_ref)                  # temperature_at(), inlined
     return p_ref * (T / T_ref) ** (-gravity / (lapse_rate * gas_constant))
 
 
@@ -46,3 +46,41 @@ def height_from_pressure(
         return h_ref - gas_constant * T_ref / gravity * math.log(p / p_ref)
     exponent = -lapse_rate * gas_constant / gravity
     return h_ref + T_ref / lapse_rate * ((p / p_ref) ** exponent - 1.0)
+
+
+class BarometricFormula:
+    """:func:`pressure_at` and :func:`height_from_pressure` about one fixed reference (a
+    barometer's calibration), with the terms that depend on the reference alone computed once:
+    the same operations on the same values as those functions, so the same results."""
+
+    def __init__(
+        self,
+        p_ref: float,
+        T_ref: float,
+        lapse_rate: float,
+        h_ref: float = 0.0,
+        gravity: float = G0,
+        gas_constant: float = R_AIR,
+    ):
+        self.p_ref, self.T_ref, self.lapse_rate, self.h_ref = p_ref, T_ref, lapse_rate, h_ref
+        self._isothermal = abs(lapse_rate) < 1e-12
+        if self._isothermal:
+            self._minus_g, self._RT = -gravity, gas_constant * T_ref
+            self._RT_over_g = gas_constant * T_ref / gravity
+        else:
+            self._pressure_exponent = -gravity / (lapse_rate * gas_constant)
+            self._height_exponent = -lapse_rate * gas_constant / gravity
+            self._T_over_lapse = T_ref / lapse_rate
+
+    def pressure(self, h: float) -> float:
+        """:func:`pressure_at` h, Pa."""
+        if self._isothermal:
+            return self.p_ref * math.exp(self._minus_g * (h - self.h_ref) / self._RT)
+        T = self.T_ref + self.lapse_rate * (h - self.h_ref)
+        return self.p_ref * (T / self.T_ref) ** self._pressure_exponent
+
+    def height(self, p: float) -> float:
+        """:func:`height_from_pressure` p, m."""
+        if self._isothermal:
+            return self.h_ref - self._RT_over_g * math.log(p / self.p_ref)
+        return self.h_ref + self._T_over_lapse * ((p / self.p_ref) ** self._height_exponent - 1.0)

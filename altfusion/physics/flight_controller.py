@@ -67,11 +67,12 @@ class FlightController(Component):
         self.thrust = self._thrust(0.0, 0.0)[0]
 
     def update(self) -> None:
-        if not (math.isfinite(self.h_fb) and math.isfinite(self.vz_fb)):
-            raise ValueError(f"feedback h_fb = {self.h_fb!r}, vz_fb = {self.vz_fb!r} not finite")
-        self.h_ref, self.vz_ref, self.az_ref = self._profile.reference(self.time)
-        error = self.h_ref - self.h_fb
-        integral = self.integral + error * self.dt
+        h_fb, vz_fb = self.h_fb, self.vz_fb
+        if not (math.isfinite(h_fb) and math.isfinite(vz_fb)):
+            raise ValueError(f"feedback h_fb = {h_fb!r}, vz_fb = {vz_fb!r} not finite")
+        self.h_ref, self.vz_ref, self.az_ref = self._profile.reference(self.clock.now)
+        error = self.h_ref - h_fb
+        integral = self.integral + error * self.clock.step_size
         self.thrust, saturated = self._thrust(error, integral)
         if not saturated:
             self.integral = integral
@@ -79,13 +80,9 @@ class FlightController(Component):
     def _thrust(self, error: float, integral: float) -> tuple[float, bool]:
         """Thrust for an altitude error and error integral; also whether it saturated."""
         p = self.params
-        accel = (
-            self.az_ref
-            + p.kp * error
-            + p.kd * (self.vz_ref - self.vz_fb)
-            + p.ki * integral
-        )
-        thrust = p.mass * (p.gravity + accel) + p.drag_coefficient * self.vz_ref * abs(self.vz_ref)
+        vz_ref = self.vz_ref
+        accel = self.az_ref + p.kp * error + p.kd * (vz_ref - self.vz_fb) + p.ki * integral
+        thrust = p.mass * (p.gravity + accel) + p.drag_coefficient * vz_ref * abs(vz_ref)
         if math.isnan(thrust):      # inf - inf from absurd feedback; +-inf is clipped below
             raise ValueError(f"feedback h_fb = {self.h_fb!r}, vz_fb = {self.vz_fb!r} gives "
                              f"no thrust")

@@ -26,6 +26,7 @@ All altitudes are shifted by ``offset`` (m), the height of the profile's zero.
 
 import math
 from abc import ABC, abstractmethod
+from bisect import bisect_right
 
 import numpy as np
 
@@ -53,17 +54,15 @@ class AccelerationSegments(Profile):
             h += v * duration + 0.5 * accel * duration**2
             v += accel * duration
             t += duration
+        self._start_times = [start[0] for start in self._starts]
         self._end = (t, h, v)
 
     def reference(self, t: float) -> tuple[float, float, float]:
         t_end, h_end, v_end = self._end
         if t >= t_end:
             return h_end + v_end * (t - t_end), v_end, 0.0
-        t0, h0, v0, accel = self._starts[0]
-        for start in self._starts:
-            if start[0] > t:
-                break
-            t0, h0, v0, accel = start
+        # The last segment started by t (the first one before it); starts never decrease.
+        t0, h0, v0, accel = self._starts[max(bisect_right(self._start_times, t) - 1, 0)]
         tau = max(0.0, t - t0)
         return h0 + v0 * tau + 0.5 * accel * tau**2, v0 + accel * tau, accel
 

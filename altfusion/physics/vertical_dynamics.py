@@ -104,27 +104,33 @@ class VerticalDynamics(Component):
         thrust = self.thrust
         if not math.isfinite(thrust):
             raise ValueError(f"input thrust = {thrust!r} is not finite")
+        p = self.params
+        mass, drag, ground_h = p.mass, p.drag_coefficient, p.ground_h
+        # acceleration(vz, thrust) written out: (thrust - m g - c vz |vz|) / m, the same
+        # operations in the same order, with thrust - m g (its first) taken once.
+        net = thrust - mass * p.gravity
         h, vz = self.h, self.vz
-        accel = self.acceleration
+        half_dt, sixth_dt = 0.5 * dt, dt / 6.0
         for _ in range(substeps):
             # Classical RK4 on (h, vz) with the thrust held constant.
-            a1 = accel(vz, thrust)
-            v2 = vz + 0.5 * dt * a1
-            a2 = accel(v2, thrust)
-            v3 = vz + 0.5 * dt * a2
-            a3 = accel(v3, thrust)
+            a1 = (net - drag * vz * abs(vz)) / mass
+            v2 = vz + half_dt * a1
+            a2 = (net - drag * v2 * abs(v2)) / mass
+            v3 = vz + half_dt * a2
+            a3 = (net - drag * v3 * abs(v3)) / mass
             v4 = vz + dt * a3
-            a4 = accel(v4, thrust)
-            h += dt / 6.0 * (vz + 2.0 * v2 + 2.0 * v3 + v4)
-            vz += dt / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
-            if h <= self.params.ground_h and vz <= 0.0:
-                h, vz = self.params.ground_h, 0.0
-        az = accel(vz, thrust)
+            a4 = (net - drag * v4 * abs(v4)) / mass
+            h += sixth_dt * (vz + 2.0 * v2 + 2.0 * v3 + v4)
+            vz += sixth_dt * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
+            if h <= ground_h and vz <= 0.0:
+                h, vz = ground_h, 0.0
+        az = (net - drag * vz * abs(vz)) / mass
         if not (math.isfinite(h) and math.isfinite(vz) and math.isfinite(az)):
             raise ValueError(f"input thrust = {thrust!r} N drives the state non-finite "
                              f"(h = {h!r}, vz = {vz!r}); state kept at h = {self.h!r} m")
         self.h, self.vz, self.az = h, vz, az
-        self._settle_on_ground()
+        if h <= ground_h and vz <= 0.0 and az <= 0.0:      # _settle_on_ground(), inlined
+            self.h, self.vz, self.az = ground_h, 0.0, 0.0
 
     def _settle_on_ground(self) -> None:
         """On the ground with a net downward force the vehicle rests: vz = az = 0."""

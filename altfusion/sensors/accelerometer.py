@@ -45,6 +45,7 @@ class Accelerometer(SampledSensor):
     Params = AccelerometerParams
     prefix = "acc"
     streams = ("noise", "turn_on_bias")
+    normal_streams = ("noise",)
 
     def __init__(self, params: AccelerometerParams | None = None, **kwargs):
         self.az = 0.0
@@ -59,5 +60,5 @@ class Accelerometer(SampledSensor):
         p = self.params
         specific_force = require_finite("az", self.az) + p.gravity
         measured = specific_force + self.total_bias + p.noise_std * (
-            self.rng["noise"].standard_normal())
+            self.normal["noise"].draw())
         return Sample({"acc_z": measured - p.nominal_gravity})

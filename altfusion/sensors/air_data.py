@@ -37,8 +37,9 @@ from dataclasses import dataclass
 
 from altfusion.constants import ISA_LAPSE_RATE, ISA_P0, ISA_T0, R_AIR
 from altfusion.params import param
-from altfusion.physics.barometric import height_from_pressure, pressure_at
+from altfusion.physics.barometric import BarometricFormula
 from altfusion.sensors.sampling import Sample, SampledSensor, SamplingParams, require_finite
+from altfusion.timegrid import TickClock
 
 SECONDS_PER_HOUR = 3600.0
 
@@ -116,12 +117,17 @@ class AirDataModule(SampledSensor):
     Params = AirDataParams
     prefix = "baro"
     streams = ("height_noise", "drift", "temperature_noise")
+    normal_streams = streams
 
     def __init__(self, params: AirDataParams | None = None, **kwargs):
         self.p_static = ISA_P0
         self.T_air = ISA_T0
         self.wind_speed = 0.0
         super().__init__(params, **kwargs)
+
+    def configure_sensor(self, clock: TickClock) -> None:
+        p = self.params
+        self._calibration = BarometricFormula(p.P0, p.T0, p.lapse_rate, p.H0)
 
     def reset_sensor(self) -> None:
         p = self.params
@@ -133,13 +139,11 @@ class AirDataModule(SampledSensor):
     # ----------------------------------------------------------------- calibration
     def calibrated_height(self, pressure: float) -> float:
         """whang2008 eq. (1) / bao2017 eq. (2) with the launch calibration, m."""
-        p = self.params
-        return height_from_pressure(pressure, p.P0, p.T0, p.lapse_rate, p.H0)
+        return self._calibration.height(pressure)
 
     def calibrated_pressure(self, height: float) -> float:
         """The inverse of :meth:`calibrated_height`, Pa."""
-        p = self.params
-        return pressure_at(height, p.P0, p.T0, p.lapse_rate, p.H0)
+        return self._calibration.pressure(height)
 
     def dynamic_pressure(self, p_static: float, T_air: float, wind_speed: float) -> float:
         """bao2017 eq. (7): ½ρv², with the actual or the fixed air density, Pa."""
@@ -161,25 +165,27 @@ class AirDataModule(SampledSensor):
             raise ValueError(f"sensed pressure {p_sensor!r} Pa <= 0 (wind_speed = {wind!r} "
                              f"m/s, pressure_bias = {p.pressure_bias!r} Pa)")
         self._advance_drift()
-        noise = p.height_noise_std * self.rng["height_noise"].standard_normal()
-        height = self.calibrated_height(p_sensor) + self.drift + noise
+        normal = self.normal
+        calibration = self._calibration
+        noise = p.height_noise_std * normal["height_noise"].draw()
+        height = calibration.height(p_sensor) + self.drift + noise
         if p.T0 + p.lapse_rate * (height - p.H0) <= 0:
             raise ValueError(f"baro-height {height:.6g} m (drift {self.drift:.6g} m, noise "
                              f"{noise:.6g} m) is beyond the calibration's atmosphere, whose "
                              f"temperature reaches 0 K: lower height_noise_std or the drift")
-        baro_p = quantize(self.calibrated_pressure(height), p.pressure_resolution)
-        temperature_noise = p.temperature_noise_std * (
-            self.rng["temperature_noise"].standard_normal())
+        baro_p = quantize(calibration.pressure(height), p.pressure_resolution)
+        temperature_noise = p.temperature_noise_std * normal["temperature_noise"].draw()
         baro_T = quantize(T_air + p.temperature_bias + temperature_noise,
                           p.temperature_resolution)
         return Sample({"baro_p": baro_p, "baro_T": baro_T,
-                       "baro_h": self.calibrated_height(baro_p), "baro_drift": self.drift})
+                       "baro_h": calibration.height(baro_p), "baro_drift": self.drift})
 
     def _advance_drift(self) -> None:
         """bao2017 eq. (6) over the time since the last sample: dε_d/dt = w, E[w] = drift_rate,
         so ε_d grows by drift_rate·Δt + N(0, σ²Δt)."""
         p = self.params
-        elapsed = self.ticks_since(self._drift_tick)
-        self._drift_tick = self.clock.ticks
-        step = math.sqrt(p.drift_variance_rate * elapsed) * self.rng["drift"].standard_normal()
+        clock = self.clock
+        elapsed = (clock.ticks - self._drift_tick) * clock.step_size       # ticks_since()
+        self._drift_tick = clock.ticks
+        step = math.sqrt(p.drift_variance_rate * elapsed) * self.normal["drift"].draw()
         self.drift += p.drift_rate * elapsed + step

@@ -62,6 +62,7 @@ baro height offset dh moves the pressure by the hypsometric equation, p' = p·ex
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -192,6 +193,32 @@ def ramp(t: float, start: float, duration: float) -> float:
     return min(max((t - start) / duration, 0.0), 1.0)
 
 
+class _StreamNames(NamedTuple):
+    """The attribute names SensorFaults reads and writes for one stream, made once."""
+
+    prefix: str
+    raw_values: tuple[tuple[str, str], ...]
+    """(output, input) of each sample value: ``("baro_h", "raw_baro_h")``..."""
+    validity: str | None
+    raw_validity: str | None
+    ranging: bool
+    """A range sensor (:data:`RANGE_SOURCES`)."""
+    count: str
+    raw_count: str
+    time: str
+    raw_time: str
+    fault: str
+    """The method applying the scenario to a sample: ``_fault_<prefix>``."""
+
+    @classmethod
+    def of(cls, prefix: str) -> "_StreamNames":
+        validity = VALIDITY.get(prefix)
+        return cls(prefix, tuple((name, f"raw_{name}") for name in STREAMS[prefix]),
+                   validity, None if validity is None else f"raw_{validity}",
+                   prefix in RANGE_SOURCES, f"{prefix}_count", f"raw_{prefix}_count",
+                   f"{prefix}_time", f"raw_{prefix}_time", f"_fault_{prefix}")
+
+
 class SensorFaults(Component):
     """Inputs ``raw_<signal>`` of :data:`PASSED_SIGNALS`, ``h``, ``thrust``; outputs the
     signals of :data:`PASSED_SIGNALS` and ``fault_active``."""
@@ -220,6 +247,8 @@ class SensorFaults(Component):
         if p.ground_effect_height >= p.ground_effect_zone:
             raise ParameterError("ground_effect_height", p.ground_effect_height,
                                  f"must be below ground_effect_zone = {p.ground_effect_zone}")
+        self._streams = tuple(_StreamNames.of(prefix) for prefix in STREAMS)
+        self._may_stop = p.scenario in ("silent", "failover")
 
     def reset(self) -> None:
         p = self.params
@@ -261,28 +290,30 @@ class SensorFaults(Component):
 
     # ------------------------------------------------------------------ Component
     def update(self) -> None:
-        t = self.time
+        p = self.params
+        t = self.clock.now
         height = self._finite_input("h")
         thrust = self._finite_input("thrust")
-        if height - self.params.ground_h > self.params.ground_effect_zone:
+        if height - p.ground_h > p.ground_effect_zone:
             self._left_ground = True
-        self.fault_active = self.params.scenario != "none" and t >= self.params.fault_start
-        for prefix in STREAMS:
-            if self._stopped(prefix, t):
+        self.fault_active = p.scenario != "none" and t >= p.fault_start
+        for names in self._streams:
+            prefix = names.prefix
+            if self._may_stop and self._stopped(prefix, t):
                 continue
             if prefix == "gps" and self._gps_outage(t):
                 self.gps_fix = False
                 self._last_count[prefix] = self.raw_gps_count
                 continue
-            if prefix in VALIDITY:
-                valid = bool(getattr(self, f"raw_{VALIDITY[prefix]}"))
-                if prefix in RANGE_SOURCES and self._range_phase(t) in ("stuck", "low"):
+            if names.validity is not None:
+                valid = bool(getattr(self, names.raw_validity))
+                if names.ranging and self._range_phase(t) in ("stuck", "low"):
                     valid = True
-                setattr(self, VALIDITY[prefix], valid)
-            count = getattr(self, f"raw_{prefix}_count")
+                setattr(self, names.validity, valid)
+            count = getattr(self, names.raw_count)
             if count != self._last_count[prefix]:
                 self._last_count[prefix] = count
-                self._pass_sample(prefix, t, height, thrust)
+                self._pass_sample(names, t, height, thrust)
 
     def _finite_input(self, name: str) -> float:
         """Input ``name``, or its last finite value (a non-finite truth is not a fault)."""
@@ -291,17 +322,18 @@ class SensorFaults(Component):
             self._held[name] = value
         return self._held[name]
 
-    def _pass_sample(self, prefix: str, t: float, height: float, thrust: float) -> None:
-        """Apply the scenario to the new sample of ``prefix`` and deliver it."""
-        sample = {name: getattr(self, f"raw_{name}") for name in STREAMS[prefix]}
-        sample[f"{prefix}_time"] = float(getattr(self, f"raw_{prefix}_time"))
+    def _pass_sample(self, names: "_StreamNames", t: float, height: float,
+                     thrust: float) -> None:
+        """Apply the scenario to the new sample of stream ``names.prefix`` and deliver it."""
+        sample = {name: getattr(self, raw) for name, raw in names.raw_values}
+        sample[names.time] = float(getattr(self, names.raw_time))
         if self.fault_active or self.params.scenario in ("baro_drift", "gnss_step"):
-            apply = getattr(self, f"_fault_{prefix}")
+            apply = getattr(self, names.fault)
             apply(sample, t, height, thrust)
-            self._wild(prefix, sample, t)
+            self._wild(names.prefix, sample, t)
         for name, value in sample.items():
             setattr(self, name, value)
-        setattr(self, f"{prefix}_count", getattr(self, f"{prefix}_count") + 1)
+        setattr(self, names.count, getattr(self, names.count) + 1)
 
     # ------------------------------------------------------------------ faults per stream
     def _fault_baro(self, sample: dict, t: float, height: float, thrust: float) -> None:

@@ -110,6 +110,7 @@ class GnssReceiver(SampledSensor):
     Params = GnssParams
     prefix = "gps"
     streams = ("height_noise", "velocity_noise", "gauss_markov", "geometry", "outage")
+    normal_streams = ("height_noise", "velocity_noise", "gauss_markov")
 
     def __init__(self, params: GnssParams | None = None, **kwargs):
         self.h = 0.0
@@ -132,12 +133,14 @@ class GnssReceiver(SampledSensor):
                 raise ParameterError("nsat_min", p.nsat_min, f"exceeds nsat_max = {p.nsat_max}")
             if not p.nsat_min <= p.nsat <= p.nsat_max:
                 raise ParameterError("nsat", p.nsat, "must lie in [nsat_min, nsat_max]")
-        self._windows = None
+        self._windows: list[tuple[float, float]] = []
+        """The scheduled outages as (start, end) pairs of Python floats."""
         if p.outage_windows:
-            self._windows = parse_table(p.outage_windows, "outage_windows")
-            if np.any(self._windows[:, 1] <= self._windows[:, 0]):
+            windows = parse_table(p.outage_windows, "outage_windows")
+            if np.any(windows[:, 1] <= windows[:, 0]):
                 raise ParameterError("outage_windows", p.outage_windows,
                                      "each window must end after it starts")
+            self._windows = [(start, end) for start, end in windows.tolist()]
 
     def _table(self, name: str, integer: bool) -> np.ndarray | None:
         text = getattr(self.params, name)
@@ -157,7 +160,7 @@ class GnssReceiver(SampledSensor):
         self.gps_vdop, self.gps_nsat, self.gps_fix = NO_FIX_DOP, 0, False
         self._nsat = p.nsat
         self._geometry_tick = 0
-        self._gm_error = p.gm_std * self.rng["gauss_markov"].standard_normal()
+        self._gm_error = p.gm_std * self.normal["gauss_markov"].draw()
         self._gm_tick = 0
         self._outage_start = self._outage_end = self.time
 
@@ -189,16 +192,21 @@ class GnssReceiver(SampledSensor):
     def _advance_gauss_markov(self) -> float:
         """e ← φe + σ√(1-φ²)·n with φ = exp(-Δt/τ): exact discretization, stationary σ."""
         p = self.params
-        phi = math.exp(-self.ticks_since(self._gm_tick) / p.gm_time_constant)
-        self._gm_tick = self.clock.ticks
-        draw = self.rng["gauss_markov"].standard_normal()
+        clock = self.clock
+        elapsed = (clock.ticks - self._gm_tick) * clock.step_size          # ticks_since()
+        phi = math.exp(-elapsed / p.gm_time_constant)
+        self._gm_tick = clock.ticks
+        draw = self.normal["gauss_markov"].draw()
         self._gm_error = phi * self._gm_error + p.gm_std * math.sqrt(1.0 - phi * phi) * draw
         return self._gm_error
 
     def in_outage(self, t: float) -> bool:
         """True inside a scheduled window or a random outage at time t."""
-        scheduled = self._windows is not None and bool(
-            np.any((self._windows[:, 0] <= t) & (t < self._windows[:, 1])))
+        scheduled = False
+        for start, end in self._windows:
+            if start <= t < end:
+                scheduled = True
+                break
         return self._in_random_outage(t) or scheduled
 
     def _in_random_outage(self, t: float) -> bool:
@@ -216,11 +224,11 @@ class GnssReceiver(SampledSensor):
         p = self.params
         h = require_finite("h", self.h)
         vz = require_finite("vz", self.vz)
-        t = self.time
+        t = self.clock.now
         nsat, vdop = self.geometry(t)
         gm_error = self._advance_gauss_markov()
-        height_noise = self.height_sigma(vdop, nsat) * self.rng["height_noise"].standard_normal()
-        velocity_noise = p.velocity_noise_std * self.rng["velocity_noise"].standard_normal()
+        height_noise = self.height_sigma(vdop, nsat) * self.normal["height_noise"].draw()
+        velocity_noise = p.velocity_noise_std * self.normal["velocity_noise"].draw()
         if self.in_outage(t) or nsat < MIN_SATELLITES_FOR_FIX:
             return Sample({"gps_fix": False}, new=False)
         return Sample({

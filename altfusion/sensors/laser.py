@@ -43,6 +43,7 @@ class LaserRangefinder(SampledSensor):
     Params = LaserRangefinderParams
     prefix = "laser"
     streams = ("noise",)
+    normal_streams = streams
 
     def __init__(self, params: LaserRangefinderParams | None = None, **kwargs):
         self.h = 0.0
@@ -62,7 +63,7 @@ class LaserRangefinder(SampledSensor):
     def measure(self) -> Sample:
         p = self.params
         height = require_finite("h", self.h) - require_finite("terrain_h", self.terrain_h)
-        noise = p.noise_std * self.rng["noise"].standard_normal()
+        noise = p.noise_std * self.normal["noise"].draw()
         if not p.min_range <= height <= p.max_range:
             return Sample({"laser_h": 0.0, "laser_valid": False})
         return Sample({"laser_h": height + noise, "laser_valid": True})

@@ -38,6 +38,7 @@ class RadioAltimeter(SampledSensor):
     Params = RadioAltimeterParams
     prefix = "radar"
     streams = ("noise",)
+    normal_streams = streams
 
     def __init__(self, params: RadioAltimeterParams | None = None, **kwargs):
         self.h = 0.0
@@ -51,7 +52,7 @@ class RadioAltimeter(SampledSensor):
     def measure(self) -> Sample:
         p = self.params
         height = require_finite("h", self.h) - require_finite("terrain_h", self.terrain_h)
-        noise = p.noise_std * self.rng["noise"].standard_normal()
+        noise = p.noise_std * self.normal["noise"].draw()
         if not 0.0 <= height <= p.max_range:
             return Sample({"radar_valid": False}, new=False)
         return Sample({"radar_h": height + noise, "radar_valid": True})

@@ -21,7 +21,9 @@ The multi-rate convention of ``docs/signals.md`` (FMI 2.0 has no clocks):
 Randomness: each sensor draws from its own ``numpy`` ``SeedSequence`` built from its ``seed``
 parameter and its prefix (so two different sensors with equal seeds are still independent),
 spawned into one ``Generator`` per error source: enabling one error source never changes
-another's realization, and the same seed gives identical outputs.
+another's realization, and the same seed gives identical outputs. A stream drawn only through
+``standard_normal()`` (``normal_streams``) is drawn :class:`NormalDraws` at a time: the same
+numbers, at a fraction of numpy's cost per call.
 """
 
 import math
@@ -67,6 +69,34 @@ class Sample(NamedTuple):
     new: bool = True
 
 
+NORMAL_BATCH = 256
+"""Standard normal numbers :class:`NormalDraws` takes from its generator at once."""
+
+
+class NormalDraws:
+    """The standard normal numbers of one ``Generator``, taken ``batch`` at a time.
+
+    :meth:`draw` returns the same numbers in the same order as one ``standard_normal()`` call
+    per number (numpy fills an array with the same algorithm, number after number), for about
+    a tenth of the instructions of a numpy call. The generator runs up to a batch ahead, so
+    nothing else may draw from it.
+    """
+
+    def __init__(self, rng: np.random.Generator, batch: int = NORMAL_BATCH):
+        self._rng = rng
+        self._batch = batch
+        self._left: list[float] = []
+        """The batch's numbers not yet drawn, the next one last."""
+
+    def draw(self) -> float:
+        """The next standard normal number."""
+        left = self._left
+        if not left:
+            left = self._left = self._rng.standard_normal(self._batch).tolist()
+            left.reverse()
+        return left.pop()
+
+
 def first_sample_tick(clock: TickClock, offset: float, period_ticks: int) -> int:
     """The first tick n >= 1 at which start + n·step = offset + k·period for some k >= 0."""
     start = exact(clock.time(0))
@@ -103,6 +133,9 @@ class SampledSensor(Component):
 
     prefix: ClassVar[str]
     streams: ClassVar[tuple[str, ...]] = ()
+    normal_streams: ClassVar[tuple[str, ...]] = ()
+    """The streams drawn only through ``standard_normal()``: through ``self.normal[name]``
+    (:class:`NormalDraws`), never ``self.rng[name]``."""
 
     # ----------------------------------------------------------------- hooks
     def configure_sensor(self, clock: TickClock) -> None:
@@ -140,16 +173,18 @@ class SampledSensor(Component):
         children = np.random.SeedSequence(entropy).spawn(len(self.streams))
         self.rng = {name: np.random.default_rng(child)
                     for name, child in zip(self.streams, children, strict=True)}
+        self.normal = {name: NormalDraws(self.rng[name]) for name in self.normal_streams}
         self._queue: deque[tuple[int, float, Sample]] = deque()
         setattr(self, f"{self.prefix}_count", 0)
         setattr(self, f"{self.prefix}_time", self.time)
         self.reset_sensor()
 
     def update(self) -> None:
-        tick = self.clock.ticks
+        clock = self.clock
+        tick = clock.ticks
         queue = self._queue
         if tick >= self._first_tick and (tick - self._first_tick) % self._period_ticks == 0:
-            queue.append((tick + self._latency_ticks, self.time, self.measure()))
+            queue.append((tick + self._latency_ticks, clock.now, self.measure()))
         while queue and queue[0][0] <= tick:
             _, stamp, sample = queue.popleft()
             self._deliver(stamp, sample)
