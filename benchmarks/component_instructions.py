@@ -14,12 +14,9 @@ randomization off where ``setarch`` runs. ``--base``: the root of another checko
 """
 
 import argparse
-import os
-import platform
-import re
-import subprocess
-import sys
 from pathlib import Path
+
+from instructions_per_step import callgrind_count
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -60,29 +57,11 @@ for n in range(int(sys.argv[1])):
 """
 
 
-def _setarch_works() -> bool:
-    """Whether ``setarch -R`` (no address-space randomization) runs here."""
-    try:
-        return subprocess.run(["setarch", platform.machine(), "-R", "true"],
-                              capture_output=True).returncode == 0
-    except OSError:
-        return False
-
-
 def instructions(name: str, steps: int, root: Path) -> int:
     """Instructions of a whole process that builds component ``name`` and steps it."""
     code = STEP.format(case=CASES[name], faults=name == "faults")
-    no_aslr = ["setarch", platform.machine(), "-R"] if _setarch_works() else []
-    env = {**os.environ, "PYTHONHASHSEED": "0", "OPENBLAS_NUM_THREADS": "1",
-           "OMP_NUM_THREADS": "1", "PYTHONPATH": str(root)}    # and run in root: sys.path[0]
-    completed = subprocess.run(
-        [*no_aslr, "valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null",
-         sys.executable, "-c", code, str(steps)],
-        capture_output=True, text=True, env=env, cwd=root, check=True)
-    found = re.search(r"Collected : (\d+)", completed.stderr)
-    if found is None:
-        raise RuntimeError(f"no instruction count in valgrind's output:\n{completed.stderr}")
-    return int(found.group(1))
+    return callgrind_count(code, str(steps), env={"PYTHONPATH": str(root)},
+                           cwd=root)                     # and run in root: sys.path[0]
 
 
 def main() -> None:

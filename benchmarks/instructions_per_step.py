@@ -50,20 +50,28 @@ def _setarch_works() -> bool:
         return False
 
 
-def instructions(system: str, backend: str, seconds: float) -> int:
-    """Instructions of a whole process that warms up and then simulates ``seconds``."""
-    code = RUN.format(models=str(MODELS), system=system, backend=backend, warm_up=WARM_UP)
+def callgrind_count(code: str, argument: str, env: dict[str, str] | None = None,
+                    cwd: Path | None = None) -> int:
+    """Instructions of a whole ``python -c code argument`` process, counted by callgrind with
+    ``PYTHONHASHSEED`` fixed, OpenBLAS on one thread and address-space randomization off
+    where ``setarch`` runs (``env`` added to the environment, run in ``cwd``)."""
     no_aslr = ["setarch", platform.machine(), "-R"] if _setarch_works() else []
-    env = {**os.environ, "PYTHONHASHSEED": "0", "OPENBLAS_NUM_THREADS": "1",
-           "OMP_NUM_THREADS": "1"}
     completed = subprocess.run(
         [*no_aslr, "valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null",
-         sys.executable, "-c", code, repr(seconds)],
-        capture_output=True, text=True, env=env, check=True)
+         sys.executable, "-c", code, argument],
+        capture_output=True, text=True, check=True, cwd=cwd,
+        env={**os.environ, "PYTHONHASHSEED": "0", "OPENBLAS_NUM_THREADS": "1",
+             "OMP_NUM_THREADS": "1", **(env or {})})
     found = re.search(r"Collected : (\d+)", completed.stderr)
     if found is None:
         raise RuntimeError(f"no instruction count in valgrind's output:\n{completed.stderr}")
     return int(found.group(1))
+
+
+def instructions(system: str, backend: str, seconds: float) -> int:
+    """Instructions of a whole process that warms up and then simulates ``seconds``."""
+    code = RUN.format(models=str(MODELS), system=system, backend=backend, warm_up=WARM_UP)
+    return callgrind_count(code, repr(seconds))
 
 
 def main() -> None:
