@@ -512,7 +512,7 @@ class AltitudeEKF(Estimator):
         return h_s, list(row_h)
 
     def _fuse_height(self, source: str, z: float, stamp: float, sigma: float) -> None:
-        R = sigma * sigma * self._adaptation(source)
+        R = self._noise_variance(source, sigma)
         if not self.started:
             self._start(source, z, R)
             return
@@ -632,7 +632,7 @@ class AltitudeEKF(Estimator):
         z, stamp, sigma = self._reference_sample
         h_s, _, row_h, _ = self._back(stamp)
         predicted, row = self._model(self._reference, h_s, row_h)
-        S_ref = quadratic_form(self.P, row) + sigma * sigma * self._adaptation(self._reference)
+        S_ref = quadratic_form(self.P, row) + self._noise_variance(self._reference, sigma)
         self._reset_to_reference(z - predicted, S_ref)
         return True
 
@@ -640,6 +640,10 @@ class AltitudeEKF(Estimator):
         self._reference_rejected_since = None
         self.height_reset(self.aid[self._reference], y, S, f"the height reference rejected for "
                                                  f"{self.params.reset_timeout:g} s")
+
+    def _noise_variance(self, source: str, sigma: float) -> float:
+        """R of a ``source`` sample of noise ``sigma``: σ² times its noise check's factor."""
+        return sigma * sigma * self._adaptation(source)
 
     def _adaptation(self, source: str) -> float:
         """The factor on ``source``'s R of its noise check (1: off)."""

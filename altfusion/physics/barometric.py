@@ -26,10 +26,7 @@ def pressure_at(
     gas_constant: float = R_AIR,
 ) -> float:
     """Static pressure at height h, Pa, for a constant lapse rate (hydrostatic, ideal gas)."""
-    if abs(lapse_rate) < 1e-12:
-        return p_ref * math.exp(-gravity * (h - h_ref) / (gas_constant * T_ref))
-    T = T_ref + lapse_rate * (h - h_ref)                  # temperature_at(), inlined
-    return p_ref * (T / T_ref) ** (-gravity / (lapse_rate * gas_constant))
+    return BarometricFormula(p_ref, T_ref, lapse_rate, h_ref, gravity, gas_constant).pressure(h)
 
 
 def height_from_pressure(
@@ -42,16 +39,14 @@ def height_from_pressure(
     gas_constant: float = R_AIR,
 ) -> float:
     """Barometric height, m: h = h_ref + (T_ref/Γ)[(p/p_ref)^(-Γ R/g) - 1] (whang2008 eq. 1)."""
-    if abs(lapse_rate) < 1e-12:
-        return h_ref - gas_constant * T_ref / gravity * math.log(p / p_ref)
-    exponent = -lapse_rate * gas_constant / gravity
-    return h_ref + T_ref / lapse_rate * ((p / p_ref) ** exponent - 1.0)
+    return BarometricFormula(p_ref, T_ref, lapse_rate, h_ref, gravity, gas_constant).height(p)
 
 
 class BarometricFormula:
-    """:func:`pressure_at` and :func:`height_from_pressure` about one fixed reference (a
-    barometer's calibration), with the terms that depend on the reference alone computed once:
-    the same operations on the same values as those functions, so the same results."""
+    """The formula about one reference (H0, T0, P0), with the terms that depend on the
+    reference alone computed once: kept by a barometer's calibration, which converts every
+    sample about the same reference; :func:`pressure_at` and :func:`height_from_pressure`
+    build one per call."""
 
     def __init__(
         self,
@@ -73,14 +68,16 @@ class BarometricFormula:
             self._T_over_lapse = T_ref / lapse_rate
 
     def pressure(self, h: float) -> float:
-        """:func:`pressure_at` h, Pa."""
+        """Static pressure at height h, Pa: p_ref·(T/T_ref)^(-g/(Γ R)), T = T_ref + Γ(h - h_ref)
+        (p_ref·exp(-g (h - h_ref)/(R T_ref)) isothermal)."""
         if self._isothermal:
             return self.p_ref * math.exp(self._minus_g * (h - self.h_ref) / self._RT)
         T = self.T_ref + self.lapse_rate * (h - self.h_ref)
         return self.p_ref * (T / self.T_ref) ** self._pressure_exponent
 
     def height(self, p: float) -> float:
-        """:func:`height_from_pressure` p, m."""
+        """Barometric height at pressure p, m: h_ref + (T_ref/Γ)[(p/p_ref)^(-Γ R/g) - 1]
+        (h_ref - (R T_ref/g) ln(p/p_ref) isothermal)."""
         if self._isothermal:
             return self.h_ref - self._RT_over_g * math.log(p / self.p_ref)
         return self.h_ref + self._T_over_lapse * ((p / self.p_ref) ** self._height_exponent - 1.0)
