@@ -229,10 +229,10 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'estimator': '525d13579af2ee59',
     },
     ('yang2020_altitude_ekf', True): {
-        'estimator': '11012eaae7bcdb9e',
+        'estimator': '2ba94f528a12bf77',
     },
     ('yang2020_altitude_ekf', False): {
-        'estimator': 'd3f325c3a178f157',
+        'estimator': '4bfcf071f124abdb',
     },
     ('xu2016_hover15', True): {
         'estimator': '0571cc41b072e0e7',

@@ -141,19 +141,58 @@ def test_a_noise_not_stated_is_measured_both_ways_and_never_flagged(scale):
 
 
 def test_the_rise_is_the_factor_over_its_earlier_peak():
-    """Each gated sample's ``rise``: the factor over the largest earlier one when it exceeds
-    it, else 1; the product of the rises is the peak over the starting factor."""
-    check = NoiseCheck(AidSource("baro"), 100.0, 100.0)
+    """A noise not stated: each gated sample's ``rise`` is the factor over the largest
+    earlier one when it exceeds it, else 1; the product of the rises is the peak over the
+    starting factor."""
+    check = NoiseCheck(AidSource("baro"), 100.0, 100.0, stated=False)
     noise = np.random.default_rng(7).standard_normal(300) * np.concatenate(
-        [np.full(150, 1.0), np.full(150, 5.0)])
+        [np.full(150, 0.1), np.full(150, 50.0)])
     product, peak = 1.0, check.factor
     for value in noise:
         check.gated(value, check.factor, check.factor)
         assert check.rise == (check.factor / peak if check.factor > peak else 1.0)
         peak = max(peak, check.factor)
         product *= check.rise
-    assert check.peak == peak > 4.0
-    assert product == pytest.approx(peak, rel=1e-12)
+    assert check.peak == peak > noise_check.UNSTATED_START
+    assert product == pytest.approx(peak / noise_check.UNSTATED_START, rel=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_a_stated_noise_rises_as_far_as_shown(seed):
+    """A stated noise: 150 samples as told, then 5x the noise (a variance ratio of 25). The
+    first 150 tell no rise, though their factor leaves 1 (the first pairs scatter) and in
+    some seeds exceeds FLAGGED; after them the rises follow the lower bound of the ratio's
+    97.5 % interval (m·k/χ²_k(0.975), below the factor in use), from the statement on: their
+    product is the peak, beyond FLAGGED and below the factor's largest value."""
+    check = NoiseCheck(AidSource("baro"), 100.0, 100.0)
+    noise = np.random.default_rng(seed).standard_normal(300) * np.concatenate(
+        [np.full(150, 1.0), np.full(150, 5.0)])
+    product, largest = 1.0, 1.0
+    for k, value in enumerate(noise):
+        check.gated(value, check.factor, check.factor)
+        largest = max(largest, check.factor)
+        if k < 150:
+            assert check.rise == 1.0
+        elif check.rise > 1.0:
+            assert check.peak == pytest.approx(
+                check.ratio * noise_check.lower_bound_factor(min(check.pairs, 199)), rel=1e-12)
+        product *= check.rise
+    assert noise_check.FLAGGED < check.peak < largest
+    assert product == pytest.approx(check.peak, rel=1e-12)
+
+
+def test_the_bounds_are_the_chi2_quantiles():
+    """The factors from m to its 97.5 % bounds against scipy's χ² quantiles: exact for one
+    and two degrees of freedom; above, Wilson-Hilferty's upper bound within 5 % from 5
+    degrees on and 19 % at 3, on the cautious side (higher), its lower bound within 0.3 %."""
+    from scipy.stats import chi2
+    for dof in (1, 2, 3, 5, 10, 50, 199):
+        upper, lower = dof / chi2.ppf(0.025, dof), dof / chi2.ppf(0.975, dof)
+        tolerance = 1e-12 if dof <= 2 else 0.05 if dof >= 5 else 0.19
+        assert noise_check.upper_bound_factor(dof) == pytest.approx(upper, rel=tolerance)
+        assert noise_check.upper_bound_factor(dof) >= upper * (1.0 - 1e-12)
+        assert noise_check.lower_bound_factor(dof) == pytest.approx(
+            lower, rel=1e-12 if dof <= 2 else 0.003)
 
 
 def test_a_stated_noise_is_never_deflated():

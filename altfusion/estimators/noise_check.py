@@ -43,7 +43,13 @@ Deviations from xu2016 (which uses the mean of y²/S itself):
 * the factor's rise above its earlier peak is told (:attr:`NoiseCheck.rise`): the samples
   fused before were weighted as that much more precise than they were, and the estimator
   raises what they taught it by as much (AltitudeEKF: the datum's variance, for its height
-  reference);
+  reference). A stated noise's factor is told as a rise only as far as the check has shown
+  it with CONFIDENCE: the lower bound of the true ratio's one-sided interval,
+  m·k/χ²_k(CONFIDENCE), once beyond :data:`FLAGGED` (for a source as told practically
+  never: at one pair a ratio beyond 20, 10⁻⁵; at two, beyond 15); the first pairs of a
+  source as told scatter (their mean exceeds 4 once in 22 at one pair), and the rises they
+  made, told as they were, widened the datum of yang2020 told its error models, and with
+  it the baro offset the user stated: RMS 0.48 -> 0.66 m;
 * a source whose noise is found well above the stated (:data:`NOISY`) is neither isolated
   nor rejected by the bias test of the fault layer (a biased source told right is) during
   its first ``window`` pairs, while its noise is being learnt; after them its gate and bias
@@ -141,22 +147,32 @@ CONFIDENCE = 0.975
 (the two-standard-error bound of a normal estimate)."""
 
 
+def chi2_quantile(dof: int, probability: float) -> float:
+    """χ²_k(p), the p quantile of χ² with k degrees of freedom: exact for k = 1 and 2,
+    Wilson-Hilferty's cube above (for k = 3 its 2.5 % quantile is 16 % low; within 5 % from
+    k = 5 on); no scipy inside an FMU, which runs in the host's Python."""
+    if dof == 1:
+        return NormalDist().inv_cdf(0.5 + probability / 2.0) ** 2
+    if dof == 2:
+        return -2.0 * math.log1p(-probability)
+    spread = 2.0 / (9.0 * dof)
+    return dof * (1.0 - spread + NormalDist().inv_cdf(probability) * math.sqrt(spread)) ** 3
+
+
 @cache
 def upper_bound_factor(dof: int) -> float:
     """k/χ²_k(1 - CONFIDENCE): the factor from the mean m of k χ² ratios of one degree to the
     upper bound of the true ratio's one-sided CONFIDENCE interval (1018 for k = 1, 39.5 for
-    2, 3.08 for 10, 1.23 for 199). χ²_1 and χ²_2 exact, Wilson-Hilferty's cube above (for
-    k = 3 its quantile is 16 % low, a bound 19 % wide, the cautious side; within 5 % from
-    k = 5 on); no scipy inside an FMU, which runs in the host's Python."""
-    tail = 1.0 - CONFIDENCE
-    if dof == 1:
-        quantile = NormalDist().inv_cdf(0.5 + tail / 2.0) ** 2
-    elif dof == 2:
-        quantile = -2.0 * math.log1p(-tail)
-    else:
-        spread = 2.0 / (9.0 * dof)
-        quantile = dof * (1.0 - spread + NormalDist().inv_cdf(tail) * math.sqrt(spread)) ** 3
-    return dof / quantile
+    2, 3.10 for 10, 1.23 for 199; Wilson-Hilferty's low quantile at k = 3 makes its bound
+    19 % wide, the cautious side)."""
+    return dof / chi2_quantile(dof, 1.0 - CONFIDENCE)
+
+
+@cache
+def lower_bound_factor(dof: int) -> float:
+    """k/χ²_k(CONFIDENCE): the factor from m to the lower bound of the true ratio's one-sided
+    CONFIDENCE interval (0.20 for k = 1, 0.27 for 2, 0.49 for 10, 0.83 for 199)."""
+    return dof / chi2_quantile(dof, CONFIDENCE)
 
 
 class NoiseCheck:
@@ -182,7 +198,8 @@ class NoiseCheck:
         self.factor = 1.0 if stated else UNSTATED_START
         """f: the factor on the stated variance in use."""
         self.peak = self.factor
-        """The largest factor so far."""
+        """The largest factor so far told as a rise (a stated noise's: the largest shown,
+        :meth:`_shown`)."""
         self.rise = 1.0
         """The ratio by which the last gated sample took the factor above its earlier peak
         (1: not above): the samples fused before were weighted as if that much more precise,
@@ -212,12 +229,26 @@ class NoiseCheck:
             if pair is None:
                 return
             self.ratio += (pair - self.ratio) / min(self.pairs, self.window)
-            bound = self.ratio * upper_bound_factor(min(self.pairs,
-                                                         2 * math.ceil(self.window) - 1))
+            bound = self.ratio * upper_bound_factor(self._dof())
             self.factor = min(max(bound, self.factor / FALL, self.minimum), self.maximum)
             self.source.noisy = self.pairs < self.window
-        if self.factor > self.peak:
-            self.rise, self.peak = self.factor / self.peak, self.factor
+        told = self.factor if not self.stated else self._shown()
+        if told > self.peak:
+            self.rise, self.peak = told / self.peak, told
+
+    def _dof(self) -> int:
+        """k: the degrees of freedom of m, min(n, 2·window - 1) (the exponential window's
+        average has about 2·window - 1 once full)."""
+        return min(self.pairs, 2 * math.ceil(self.window) - 1)
+
+    def _shown(self) -> float:
+        """How much too small a stated noise is shown to be: the lower bound of the true
+        ratio's one-sided CONFIDENCE interval, m·k/χ²_k(CONFIDENCE), once beyond
+        :data:`FLAGGED`; 1 before (the statement stands)."""
+        if self.factor <= FLAGGED:          # the bound is below m, itself at most f
+            return 1.0
+        bound = self.ratio * lower_bound_factor(self._dof())
+        return bound if bound > FLAGGED else 1.0
 
     def _pair(self, innovation: float, variance: float, clip: float) -> float | None:
         """(y_k - y_(k-1))² over the sum of the two samples' ``variance``, at most ``clip``,
