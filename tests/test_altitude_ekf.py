@@ -49,7 +49,7 @@ class Flight:
         self.t = 0.0
 
     def fly(self, seconds: float, baro=0.0, gps=0.0, laser=None, acc_bias=0.0,
-            record=None) -> None:
+            record=None, laser_sigma=0.01) -> None:
         n = self.feed.n
         for _ in range(round(seconds / STEP)):
             r = self.rng.standard_normal(5)
@@ -61,7 +61,7 @@ class Flight:
                 samples["gps"] = {"gps_h": TRUE_H + gps + 0.3 * r[2], "gps_vz": 0.1 * r[3],
                                   "gps_vdop": 1.0, "gps_nsat": 10, "gps_fix": True}
             if laser is not None:
-                samples["laser"] = {"laser_h": TRUE_H - laser + 0.01 * r[4],
+                samples["laser"] = {"laser_h": TRUE_H - laser + laser_sigma * r[4],
                                     "laser_valid": True}
             self.feed.step(**samples)
             n += 1

@@ -18,8 +18,9 @@ Here, on the vertical axis only, the aid is *active* while a rangefinder
   ``hysteresis``),
 * is kinematically consistent: over spans of at least :data:`RATE_SPAN`, its rate
   ṙ = Δz/Δt against the estimator's vertical speed v (before that sample's fusion),
-  normalized, s = (ṙ - v)/√max(2R/Δt² + P_vv, :data:`RATE_FLOOR`²), low-pass filtered
-  with the time constant :data:`TAU`, |s̄| < :data:`GATE`,
+  normalized, s = (ṙ - v)/√max(2R/Δt² + P_vv, :data:`RATE_FLOOR`²) (R: the noise
+  variance in use, the noise check's factor on the stated or typical one), low-pass
+  filtered with the time constant :data:`TAU`, |s̄| < :data:`GATE`,
 
 and every rangefinder within its height limit (gated within :data:`STALE`) is consistent,
 passed its gate with its last sample and is not isolated, and no height source has its
