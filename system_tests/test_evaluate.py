@@ -176,12 +176,13 @@ def test_each_told_mode_puts_what_it_tells_in_the_scenarios_specs(fmus):
         return dict(specs[mode, scenario].spec.component(component).parameters)
 
     assert told("noise", "hajiyev", "AltitudeEKF") == {"baro_noise": 9.0, "gps_noise": 13.0,
+                                                       "gps_vdop_ref": 1.0,
                                                        "gps_vz_noise": 0.2}
     assert told("models", "hajiyev", "AltitudeEKF")["P0_offset"] == pytest.approx(0.01)
     assert told("nothing", "hajiyev", "AltitudeEKF") == {}
     for factor in (0.2, 5.0):
         assert told(f"misstated_x{factor:g}", "hajiyev", "AltitudeEKF") == pytest.approx(
-            {"baro_noise": factor * 9.0, "gps_noise": factor * 13.0,
+            {"baro_noise": factor * 9.0, "gps_noise": factor * 13.0, "gps_vdop_ref": 1.0,
              "gps_vz_noise": factor * 0.2})
     # The paper's estimator: its own component with the paper's parameters in noise and
     # models; in nothing and misstated an observer told so, the own still flying.

@@ -36,6 +36,7 @@ from altfusion.evaluation.scenarios import (
     noise_parameters,
     not_applicable,
 )
+from altfusion.evaluation.told import misstate
 from altfusion.systems.error_models import SENSOR_ERRORS
 
 DT = 0.1
@@ -174,6 +175,18 @@ def test_true_noise_goes_to_the_parameters_each_estimator_has():
                   "R_laser": pytest.approx(1e-6)}
     yang = noise_parameters(estimator(YangFusionKF), noise)
     assert yang["R_gps_vz"] == pytest.approx(0.04) and yang["R_acc"] == pytest.approx(0.0025)
+
+
+def test_the_vdop_a_gps_noise_holds_at_goes_with_it():
+    """xu2016's GNSS: 3 m at VDOP 1.5. AltitudeEKF, which scales its GNSS noise by
+    VDOP/gps_vdop_ref, is told both (it would take 4.5 m at its default reference of 1);
+    an estimator without the parameter gets the noise alone; misstated, the noise is
+    scaled and its VDOP is not."""
+    noise = {"baro_noise": 0.5, "gps_noise": 3.0, "gps_vdop_ref": 1.5}
+    told = noise_parameters(estimator(AltitudeEKF), noise)
+    assert told == {"baro_noise": 0.5, "gps_noise": 3.0, "gps_vdop_ref": 1.5}
+    assert noise_parameters(estimator(BaselineKF), noise) == {"R_baro": 0.25, "R_gps": 9.0}
+    assert misstate(told, 5.0) == {"baro_noise": 2.5, "gps_noise": 15.0, "gps_vdop_ref": 1.5}
 
 
 def test_every_paper_scenario_states_error_models_an_estimator_can_take():

@@ -24,7 +24,8 @@ is the evaluation's `--told` mode, each mode one evaluation of every scenario:
   has of those names or of the same quantity under its own name (BaselineKF's `bias_psd` is
   a `baro_bias_psd`);
 * `noise`: the true noise only, what a datasheet gives a user dropping the estimator into a
-  new system;
+  new system (the GNSS's at the receiver's nominal VDOP, told with it to an estimator that
+  scales its GNSS noise by VDOP: AltitudeEKF's `gps_vdop_ref`);
 * `nothing`: neither (each estimator's defaults);
 * `misstated`: what `noise` tells with every noise misstated x0.2 and, separately, x5 (a
   noise told as a variance x0.04 and x25).

@@ -7,7 +7,8 @@ be wrong. Each mode is one evaluation of every scenario, in its own campaigns:
 * ``models`` (the default): every estimator told its sensors' true noise and, in a paper
   scenario, the sensor error models the paper system states
   (:data:`altfusion.systems.error_models.SENSOR_ERRORS`);
-* ``noise``: the true noise only;
+* ``noise``: the true noise only (the GNSS's at the receiver's nominal VDOP, told with it:
+  ``evaluation.scenarios.NOISE_REFERENCES``);
 * ``nothing``: neither (each estimator's defaults);
 * ``misstated``: what ``noise`` tells with every noise misstated, once x0.2 and once x5
   (:data:`MISSTATED_FACTORS`: two variants; a noise told as a variance x0.04 and x25).

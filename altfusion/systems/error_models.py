@@ -23,8 +23,6 @@ The names (AltitudeEKF's; XuSHAEKF and YangFusionKF share ``baro_bias_psd``,
   ``drift_variance_rate``, or the weather's drift of the barometric reference);
 * ``P0_scale``, ``baro_scale_psd``: the baro error proportional to the height change (0 where
   the true atmosphere is the calibration's);
-* ``gps_vdop_ref``: the receiver's nominal VDOP, at which the GNSS noise (``gps_noise``) the
-  evaluation derives holds;
 * ``terrain_h``, ``P0_terrain``, ``terrain_psd``: flat terrain at a known height;
 * ``P0_acc_bias``, ``acc_bias_psd``: the accelerometer's turn-on bias (1σ squared) and its
   drift.
@@ -62,12 +60,11 @@ def _whang2008_scale_psd() -> float:
 
 XU2016 = {**CALIBRATED, **FLAT_TERRAIN,
           "baro_bias_psd": AirDataParams().drift_variance_rate,
-          "gps_vdop_ref": xu2016.SENSORS["gnss"]["vdop"],
           "P0_acc_bias": xu2016.SENSORS["accelerometer"]["bias_std"] ** 2,
           "acc_bias_psd": 0.0}
 """xu2016's sensors (``xu2016.SENSORS``): the laser over flat terrain at 0 m, the MEMS baro
-calibrated at take-off with the AirDataModule's default drift, the GNSS noise stated at VDOP
-1.5, the accelerometer's turn-on bias of σ 0.03 m/s², constant over the flight."""
+calibrated at take-off with the AirDataModule's default drift, the accelerometer's turn-on
+bias of σ 0.03 m/s², constant over the flight."""
 
 WIND_BARO_NOISE = math.hypot(xu2016.SENSORS["air_data"]["height_noise_std"],
                              0.45 * xu2016.WIND_GRADE_3["gust_std"])
@@ -83,8 +80,7 @@ SENSOR_ERRORS: dict[str, dict[str, float]] = {
                   "baro_bias_psd": whang2008.SENSORS["air_data"]["drift_variance_rate"],
                   "baro_scale_psd": _whang2008_scale_psd()},
     "bao2017": {**CALIBRATED, **NO_SCALE_ERROR,
-                "baro_bias_psd": bao2017.SENSORS["air_data"]["drift_variance_rate"],
-                "gps_vdop_ref": bao2017.QUALITY[0][1]},
+                "baro_bias_psd": bao2017.SENSORS["air_data"]["drift_variance_rate"]},
     "hajiyev": {**CALIBRATED, **NO_SCALE_ERROR,
                 "baro_bias_psd": hajiyev.SENSORS["air_data"]["drift_variance_rate"]},
     # the drift as a random walk that moves by its rate within one sample period
