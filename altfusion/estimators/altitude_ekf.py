@@ -390,9 +390,8 @@ class AltitudeEKF(Estimator):
                 continue
             sigma = self.sensor_noise[name]
             if self.range_aid is not None and self.started:
-                self.range_aid.sample(name, stamp, reading,
-                                      sigma * sigma * self._adaptation(name), self.x[V],
-                                      self.P[V][V])
+                self.range_aid.sample(name, stamp, reading, self._noise_variance(name, sigma),
+                                      self.x[V], self.P[V][V])
             if self._range_in_use(name, reading):
                 self._fuse_height(name, reading, stamp, sigma)
             elif name in self.noise_checks:

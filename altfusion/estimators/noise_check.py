@@ -45,11 +45,11 @@ Deviations from xu2016 (which uses the mean of y²/S itself):
   raises what they taught it by as much (AltitudeEKF: the datum's variance, for its height
   reference). A stated noise's factor is told as a rise only as far as the check has shown
   it with CONFIDENCE: the lower bound of the true ratio's one-sided interval,
-  m·k/χ²_k(CONFIDENCE), once beyond :data:`FLAGGED` (for a source as told practically
-  never: at one pair a ratio beyond 20, 10⁻⁵; at two, beyond 15); the first pairs of a
-  source as told scatter (their mean exceeds 4 once in 22 at one pair), and the rises they
-  made, told as they were, widened the datum of yang2020 told its error models, and with
-  it the baro offset the user stated: RMS 0.48 -> 0.66 m;
+  m·k/χ²_k(CONFIDENCE), at most the factor in use, once beyond :data:`FLAGGED` (for a
+  source as told practically never: at one pair a ratio beyond 20, 10⁻⁵; at two, beyond
+  15). The first pairs of a source as told scatter (their mean exceeds 4 once in 22 at one
+  pair): rises told from them would widen what the user stated along with the datum (the
+  numbers: docs/altitude_ekf.md);
 * a source whose noise is found well above the stated (:data:`NOISY`) is neither isolated
   nor rejected by the bias test of the fault layer (a biased source told right is) during
   its first ``window`` pairs, while its noise is being learnt; after them its gate and bias
@@ -243,11 +243,12 @@ class NoiseCheck:
 
     def _shown(self) -> float:
         """How much too small a stated noise is shown to be: the lower bound of the true
-        ratio's one-sided CONFIDENCE interval, m·k/χ²_k(CONFIDENCE), once beyond
-        :data:`FLAGGED`; 1 before (the statement stands)."""
-        if self.factor <= FLAGGED:          # the bound is below m, itself at most f
+        ratio's one-sided CONFIDENCE interval, m·k/χ²_k(CONFIDENCE), at most the factor f
+        in use (the samples were weighted by no more), once beyond :data:`FLAGGED`; 1 before
+        (the statement stands)."""
+        if self.factor <= FLAGGED:          # so is the bound, at most f
             return 1.0
-        bound = self.ratio * lower_bound_factor(self._dof())
+        bound = min(self.ratio * lower_bound_factor(self._dof()), self.factor)
         return bound if bound > FLAGGED else 1.0
 
     def _pair(self, innovation: float, variance: float, clip: float) -> float | None:

@@ -44,7 +44,7 @@ from typing import Any
 from altfusion.cosim.instances import fmu_info
 from altfusion.estimators.base import HEIGHT_SOURCES, Estimator
 from altfusion.evaluation.metrics import Fault
-from altfusion.evaluation.told import DEFAULT_TOLD, NOISE_NAMES, Told
+from altfusion.evaluation.told import DEFAULT_TOLD, NOISE_NAMES, NOISE_REFERENCES, Told
 from altfusion.montecarlo.source import CampaignError
 from altfusion.systems.catalog import build_system
 from altfusion.systems.error_models import SENSOR_ERRORS
@@ -153,12 +153,6 @@ def not_applicable(estimator: EstimatorInfo, sources: set[str], fault_needs: tup
     return None
 
 
-NOISE_REFERENCES = ("gps_vdop_ref",)
-"""Not noises but the conditions a sensor noise is stated at, told with it: the VDOP at which
-the GPS noise holds (AltitudeEKF scales its GPS noise by VDOP/``gps_vdop_ref``: told xu2016's
-3 m at VDOP 1.5 without it, it took 4.5 m, and its ``h_std`` was 1.8x its error)."""
-
-
 def sensor_params(spec: SystemSpec, component: str, fmu_paths: dict[str, Path]) -> Any:
     """The sensor core's parameters of ``component`` (its defaults with the bound values)."""
     spec_component = spec.component(component)
@@ -173,7 +167,7 @@ def sensor_noise(spec: SystemSpec, fmu_paths: dict[str, Path]) -> dict[str, floa
 
     GPS height: σ = user range error x VDOP x √max(1, nsat_reference / nsat) at the
     receiver's nominal (initial) VDOP and satellites, plus its Gauss-Markov error in
-    quadrature, with that VDOP as ``gps_vdop_ref`` (:data:`NOISE_REFERENCES`: a noise
+    quadrature, with that VDOP as ``gps_vdop_ref`` (``told.NOISE_REFERENCES``: a noise
     stated at a VDOP is one statement with it); baro: the height noise; the others: their
     white noise."""
     sensors = sensor_sources(spec)
@@ -198,7 +192,7 @@ def noise_parameters(estimator: EstimatorInfo, noise: dict[str, float]) -> dict[
     """The estimator's parameters that take the sensor noises ``noise``: the contract name,
     else ``R_<source>`` (variance), else ``<source>_noise_std``; a zero noise is floored at
     1 mm (a variance must be positive). The conditions a noise holds at
-    (:data:`NOISE_REFERENCES`) go to the estimators that have them, under their names."""
+    (``told.NOISE_REFERENCES``) go to the estimators that have them, under their names."""
     values = {}
     for name, sigma in noise.items():
         if name in NOISE_REFERENCES:

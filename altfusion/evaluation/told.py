@@ -8,7 +8,7 @@ be wrong. Each mode is one evaluation of every scenario, in its own campaigns:
   scenario, the sensor error models the paper system states
   (:data:`altfusion.systems.error_models.SENSOR_ERRORS`);
 * ``noise``: the true noise only (the GNSS's at the receiver's nominal VDOP, told with it:
-  ``evaluation.scenarios.NOISE_REFERENCES``);
+  :data:`NOISE_REFERENCES`);
 * ``nothing``: neither (each estimator's defaults);
 * ``misstated``: what ``noise`` tells with every noise misstated, once x0.2 and once x5
   (:data:`MISSTATED_FACTORS`: two variants; a noise told as a variance x0.04 and x25).
@@ -51,6 +51,11 @@ MISSTATED_FACTORS = (0.2, 5.0)
 NOISE_NAMES = ("baro_noise", "gps_noise", "gps_vz_noise", "acc_noise", "radar_noise",
                "laser_noise")
 """The contract names of the sensor noises (1σ, SI units)."""
+
+NOISE_REFERENCES = ("gps_vdop_ref",)
+"""Not noises but the conditions a noise is stated at, told with it and never misstated: the
+VDOP at which the GPS noise holds (an estimator that scales its GPS noise by
+VDOP/``gps_vdop_ref`` would otherwise take a noise stated at VDOP 1.5 as 1.5 times larger)."""
 
 SIGMA_PARAMETERS = ("user_range_error",)
 """Estimator parameters that state a noise as its 1σ under another name than the contract's
