@@ -41,6 +41,11 @@ FMI behaviour that pythonfmu 0.7.0 leaves to us:
   initial value follows, and a VendorAnnotation with the core version, the core class and the
   inputs read at the end of a step (its ``stepEndInputs``,
   :class:`~altfusion.fmi.variables.Output`).
+* The native shim reads and writes the inputs and outputs itself while the instance steps,
+  and calls :meth:`CoreSlave.do_step` without pythonfmu's bridge: each instance offers
+  itself in the slot the shim leaves in ``sys`` (:data:`SHIM_SLOTS`) and names, by value
+  reference, the core attributes the shim may read and write (:meth:`CoreSlave._native_names`:
+  the inputs and outputs, which the accessors below read and write on the core as they are).
 * In Initialization Mode, outputs follow the parameters and inputs set so far: a set marks the
   core stale and the next get rebuilds it. Importers may set parameters after
   ``enterInitializationMode`` (ECOS applies the SSP parameter set there) and then iterate their
@@ -50,6 +55,7 @@ FMI behaviour that pythonfmu 0.7.0 leaves to us:
 import contextlib
 import copy
 import sys
+import threading
 import traceback
 from collections.abc import Callable
 from dataclasses import replace
@@ -96,6 +102,13 @@ STEP_SIZE = ParamInfo(
 
 _FMI_TYPES = {float: Real, int: Integer, bool: Boolean, str: String}
 _PY_TYPES = {fmi: python for python, fmi in _FMI_TYPES.items()}
+
+SHIM_SLOTS = "_altfusion_fmi2_shim_slaves_v1"
+"""The dict in ``sys`` where the native shim leaves a slot (None, keyed by the thread) for the
+slave object pythonfmu is making (``altfusion/fmi/shim/fmi2_shim.c``, "direct access")."""
+
+_NATIVE_TYPES = (Real, Integer, Boolean)
+"""The FMI types the native shim reads and writes directly, in its order."""
 
 MAX_CACHED_BATCHES = 256
 """Accessors kept per instance for distinct lists of value references (then made anew)."""
@@ -186,6 +199,32 @@ class CoreSlave(Fmi2Slave, metaclass=ReusedSlaveClass):
         self._readers: dict[type, dict[tuple[int, ...], Any]] = {k: {} for k in self._getters}
         self._writers: dict[type, dict[tuple[int, ...], Any]] = {k: {} for k in self._getters}
         self.guid = self._class_guid()
+        self._offer_to_shim()
+
+    def _offer_to_shim(self) -> None:
+        """Fill the slot the native shim left for this thread's new slave, if it left one."""
+        slots = getattr(sys, SHIM_SLOTS, None)
+        thread = threading.get_ident()
+        if isinstance(slots, dict) and thread in slots and slots[thread] is None:
+            slots[thread] = self
+
+    def _native_names(self) -> tuple[tuple[tuple[str, ...], ...], ...]:
+        """For the native shim: per way (read, write) and FMI type (Real, Integer, Boolean),
+        by value reference, the core attribute it may read or set directly ("" for none):
+        inputs and outputs are read, inputs set, as the accessors below do."""
+        size = max(self.vars, default=-1) + 1
+        declared = {v.name: isinstance(v, Input) for v in self.variables}
+
+        def table(kind: type, inputs_only: bool) -> tuple[str, ...]:
+            names = [""] * size
+            for vr, var in self.vars.items():
+                if isinstance(var, kind) and var.name in declared and (
+                        declared[var.name] or not inputs_only):
+                    names[vr] = var.name
+            return tuple(names)
+
+        return tuple(tuple(table(kind, inputs_only) for kind in _NATIVE_TYPES)
+                     for inputs_only in (False, True))
 
     def _class_guid(self) -> str:
         """The GUID of this FMU's interface, computed from the first (fresh) instance of the

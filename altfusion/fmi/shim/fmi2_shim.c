@@ -34,6 +34,10 @@
  *    OMSimulator's master stops a simulation at any doStep status but fmi2OK. A state refused by
  *    fmi2DeSerializeFMUstate (the Python object carries a `reason`) is freed and returns
  *    fmi2Error with that reason.
+ *  - Values and steps straight to the slave: while an instance steps (after
+ *    fmi2ExitInitializationMode), fmi2Get/Set of inputs and outputs read and write the core's
+ *    attributes and fmi2DoStep calls the slave's do_step, without pythonfmu's bridge (see
+ *    "direct access" below).
  *  - Instances are reused: fmi2FreeInstance resets a healthy instance (fmi2Reset) and keeps
  *    up to POOL_SIZE of them; fmi2Instantiate of the same GUID and resources hands one back.
  *    pythonfmu re-executes the slave script at each fmi2Instantiate and keeps ~1 kB per call.
@@ -46,6 +50,7 @@
 #define _GNU_SOURCE
 #include <ctype.h>
 #include <dlfcn.h>
+#include <math.h>
 #include <pthread.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -177,6 +182,33 @@ extern PyObject* PyObject_GetAttrString(PyObject*, const char*);
 extern const char* PyUnicode_AsUTF8(PyObject*);
 extern void Py_DecRef(PyObject*);
 extern void PyErr_Clear(void);
+extern PyObject* PyErr_Occurred(void);
+extern void PyErr_Fetch(PyObject**, PyObject**, PyObject**);
+extern void Py_IncRef(PyObject*);
+extern PyObject* Py_BuildValue(const char*, ...);
+extern PyObject* PyObject_GetAttr(PyObject*, PyObject*);
+extern int PyObject_SetAttr(PyObject*, PyObject*, PyObject*);
+extern PyObject* PyObject_Str(PyObject*);
+extern int PyObject_IsTrue(PyObject*);
+extern PyObject* PyObject_CallFunctionObjArgs(PyObject*, ...);
+extern PyObject* PyObject_CallMethodObjArgs(PyObject*, PyObject*, ...);
+extern PyObject* PyUnicode_InternFromString(const char*);
+extern PyObject* PyFloat_FromDouble(double);
+extern double PyFloat_AsDouble(PyObject*);
+extern PyObject* PyLong_FromLong(long);
+extern PyObject* PyLong_FromUnsignedLong(unsigned long);
+extern long PyLong_AsLong(PyObject*);
+extern PyObject* PyBool_FromLong(long);
+extern long PyTuple_Size(PyObject*);
+extern PyObject* PyTuple_GetItem(PyObject*, long);
+extern long PyUnicode_GetLength(PyObject*);
+extern long PyList_Size(PyObject*);
+extern PyObject* PyList_GetItem(PyObject*, long);
+extern int PyList_SetSlice(PyObject*, long, long, PyObject*);
+extern PyObject* PyDict_New(void);
+extern PyObject* PyDict_GetItem(PyObject*, PyObject*);
+extern int PyDict_SetItem(PyObject*, PyObject*, PyObject*);
+extern int PyDict_DelItem(PyObject*, PyObject*);
 
 #define FORWARDED(X) \
     X(fmi2Instantiate) X(fmi2FreeInstance) X(fmi2SetupExperiment) \
@@ -193,6 +225,9 @@ extern void PyErr_Clear(void);
 static struct { FORWARDED(MEMBER) void (*finalize)(void); } pythonfmu;
 
 /* ---------------------------------------------------------------- instances */
+enum { REAL, INTEGER, BOOLEAN, KINDS };   /* the FMI types of direct access */
+enum { READ, WRITE };
+
 typedef struct Instance {
     fmi2Component inner;                 /* pythonfmu's instance */
     fmi2CallbackFunctions host;          /* the host's callbacks (its logger, environment) */
@@ -206,6 +241,14 @@ typedef struct Instance {
     char* categories[MAX_CATEGORIES];
     fmi2Status worst;                    /* the worst status logged during the current call */
     int broken;                          /* a call returned fmi2Fatal: never reused */
+    double last_successful;              /* fmi2LastSuccessfulTime (NaN before a doStep) */
+    /* direct access (see there): */
+    PyObject* slave;                     /* pythonfmu's slave object (a reference), or NULL */
+    PyObject* tables;                    /* its _native_names(): what `names` borrows from */
+    PyObject** names[2][KINDS];          /* [read/write][type][vr]: the core attribute or NULL */
+    size_t n_names[2][KINDS];
+    PyObject* log_queue;                 /* the slave's list of messages, pythonfmu's */
+    int direct;                          /* stepping: values and steps go straight to it */
 } Instance;
 
 static pthread_mutex_t lock = PTHREAD_MUTEX_INITIALIZER;
@@ -228,7 +271,10 @@ static void clear_categories(Instance* inst) {
     inst->n_categories = 0;
 }
 
+static void drop_slave(Instance* inst);
+
 static void destroy(Instance* inst) {
+    drop_slave(inst);
     clear_categories(inst);
     free(inst->name);
     free(inst->guid);
@@ -588,6 +634,255 @@ static char* resource_folder(fmi2String location, char* error, size_t size) {
     return folder;
 }
 
+/* ---------------------------------------------------------------- direct access */
+/* pythonfmu turns each fmi2Get/Set into a Python call of the slave's get_<type>/set_<type>
+ * with a list of value references built anew, and each call also makes four strings to drain
+ * the slave's log queue: ~13,000 instructions per call, more than the values cost. While an
+ * instance steps (from fmi2ExitInitializationMode to fmi2EnterInitializationMode, fmi2Reset
+ * or fmi2Terminate), the shim reads the core's attributes for the inputs and outputs and sets
+ * the inputs' itself (what altfusion.fmi.slave's accessors do for them, with the conversions
+ * pythonfmu makes), and calls the slave's do_step, passing its log messages on as pythonfmu
+ * does. Anything else goes to pythonfmu as before: parameters, strings, a value that does not
+ * convert (pythonfmu then logs why), Initialization Mode, a slave that is not a CoreSlave.
+ *
+ * The shim learns the slave object when pythonfmu makes it (fmi2Instantiate, fmi2Reset): it
+ * leaves the calling thread a slot (None, keyed by threading.get_ident()) in a dict in `sys`
+ * named SLAVE_SLOTS, which CoreSlave.__init__ fills with itself; its _native_names() lists
+ * the attribute names by value reference. */
+#define SLAVE_SLOTS "_altfusion_fmi2_shim_slaves_v1"
+
+static PyObject* core_name;      /* "core", interned */
+static PyObject* do_step_name;   /* "do_step", interned */
+
+/* Under the GIL: a slot for the slave the calling thread is about to make; its key, or NULL. */
+static PyObject* open_slot(void) {
+    PyObject* slots = PySys_GetObject(SLAVE_SLOTS);   /* borrowed */
+    if (!slots) {
+        PyObject* made = PyDict_New();
+        if (made && PySys_SetObject(SLAVE_SLOTS, made) == 0) slots = made;
+        if (made) Py_DecRef(made);                     /* sys holds it */
+    }
+    PyObject* key = PyLong_FromUnsignedLong((unsigned long)pthread_self());
+    PyObject* none = Py_BuildValue("");
+    if (!slots || !key || !none || PyDict_SetItem(slots, key, none) != 0) {
+        if (key) Py_DecRef(key);
+        key = NULL;
+    }
+    if (none) Py_DecRef(none);
+    PyErr_Clear();
+    return key;
+}
+
+/* Under the GIL: the slave left in the slot `key` (a new reference, or NULL); the slot goes. */
+static PyObject* close_slot(PyObject* key) {
+    if (!key) return NULL;
+    PyObject* slots = PySys_GetObject(SLAVE_SLOTS);
+    PyObject* found = slots ? PyDict_GetItem(slots, key) : NULL;   /* borrowed */
+    PyObject* none = Py_BuildValue("");
+    PyObject* slave = found && found != none ? found : NULL;
+    if (slave) Py_IncRef(slave);
+    if (found) PyDict_DelItem(slots, key);
+    if (none) Py_DecRef(none);
+    Py_DecRef(key);
+    PyErr_Clear();
+    return slave;
+}
+
+static void drop_slave(Instance* inst) {
+    inst->direct = 0;
+    for (int way = READ; way <= WRITE; way++)
+        for (int kind = 0; kind < KINDS; kind++) {
+            free(inst->names[way][kind]);
+            inst->names[way][kind] = NULL;
+            inst->n_names[way][kind] = 0;
+        }
+    PyObject* held[] = {inst->slave, inst->tables, inst->log_queue};
+    inst->slave = inst->tables = inst->log_queue = NULL;
+    if (!held[0] || !python_alive()) return;   /* the interpreter took them with it */
+    PyGILState_STATE gil = PyGILState_Ensure();
+    for (size_t i = 0; i < sizeof held / sizeof *held; i++)
+        if (held[i]) Py_DecRef(held[i]);
+    PyGILState_Release(gil);
+}
+
+/* Under the GIL: `table` (a tuple of names by value reference, "" for none) as an array. */
+static int name_array(PyObject* table, PyObject*** names, size_t* count) {
+    long n = table ? PyTuple_Size(table) : -1;
+    if (n < 0) return 0;
+    *names = calloc(n ? (size_t)n : 1, sizeof **names);
+    if (!*names) return 0;
+    *count = (size_t)n;
+    for (long vr = 0; vr < n; vr++) {
+        PyObject* name = PyTuple_GetItem(table, vr);   /* borrowed from `tables` */
+        long length = name ? PyUnicode_GetLength(name) : -1;
+        if (length < 0) return 0;
+        (*names)[vr] = length ? name : NULL;
+    }
+    return 1;
+}
+
+/* Under the GIL: take `slave` (a new reference) for direct access if it offers it. */
+static void adopt_slave(Instance* inst, PyObject* slave) {
+    if (!slave) return;
+    inst->slave = slave;
+    if (!core_name) core_name = PyUnicode_InternFromString("core");
+    if (!do_step_name) do_step_name = PyUnicode_InternFromString("do_step");
+    PyObject* method = PyObject_GetAttrString(slave, "_native_names");
+    inst->tables = method ? PyObject_CallFunctionObjArgs(method, NULL) : NULL;
+    if (method) Py_DecRef(method);
+    method = PyObject_GetAttrString(slave, "_get_log_queue");
+    inst->log_queue = method ? PyObject_CallFunctionObjArgs(method, NULL) : NULL;
+    if (method) Py_DecRef(method);
+    int ready = core_name && do_step_name && inst->tables && inst->log_queue
+        && PyTuple_Size(inst->tables) == 2 && PyList_Size(inst->log_queue) >= 0;
+    for (int way = READ; ready && way <= WRITE; way++) {
+        PyObject* by_kind = PyTuple_GetItem(inst->tables, way);
+        ready = by_kind && PyTuple_Size(by_kind) == KINDS;
+        for (int kind = 0; ready && kind < KINDS; kind++)
+            ready = name_array(PyTuple_GetItem(by_kind, kind), &inst->names[way][kind],
+                               &inst->n_names[way][kind]);
+    }
+    PyErr_Clear();
+    if (!ready) drop_slave(inst);   /* not one of ours: pythonfmu serves it */
+}
+
+/* Call pythonfmu's `make` (fmi2Instantiate's or fmi2Reset's), which makes a new slave object,
+ * and take that object for direct access. */
+#define MAKING_SLAVE(inst, make) do { \
+        PyGILState_STATE gil_ = PyGILState_Ensure(); \
+        PyObject* slot_ = open_slot(); \
+        PyGILState_Release(gil_); \
+        make; \
+        gil_ = PyGILState_Ensure(); \
+        PyObject* slave_ = close_slot(slot_); \
+        if ((inst)->inner) adopt_slave((inst), slave_); \
+        else if (slave_) Py_DecRef(slave_); \
+        PyGILState_Release(gil_); \
+    } while (0)
+
+/* The attribute of value reference `vr` of type `kind` that may be read or written
+ * (`way`) directly, or NULL. */
+static PyObject* direct_name(const Instance* inst, int way, int kind, fmi2ValueReference vr) {
+    return vr < inst->n_names[way][kind] ? inst->names[way][kind][vr] : NULL;
+}
+
+/* Read `n` values of type `kind` into `values`; 0 (nothing to report) if any cannot be read
+ * directly: pythonfmu reads them all then. */
+static int get_direct(Instance* inst, int kind, const fmi2ValueReference vr[], size_t n,
+                      void* values) {
+    if (!inst->direct) return 0;
+    PyGILState_STATE gil = PyGILState_Ensure();
+    PyObject* core = PyObject_GetAttr(inst->slave, core_name);
+    size_t i = 0;
+    for (; core && i < n; i++) {
+        PyObject* name = direct_name(inst, READ, kind, vr[i]);
+        PyObject* value = name ? PyObject_GetAttr(core, name) : NULL;
+        if (!value) break;
+        int ok;
+        if (kind == REAL) {             /* float(value), as the adapter converts */
+            double x = PyFloat_AsDouble(value);
+            ok = x != -1.0 || !PyErr_Occurred();
+            ((fmi2Real*)values)[i] = x;
+        } else if (kind == INTEGER) {   /* int(value) of an int; pythonfmu's cast to int */
+            long x = PyLong_AsLong(value);
+            ok = x != -1 || !PyErr_Occurred();
+            ((fmi2Integer*)values)[i] = (fmi2Integer)x;
+        } else {                        /* bool(value) */
+            int x = PyObject_IsTrue(value);
+            ok = x >= 0;
+            ((fmi2Boolean*)values)[i] = x;
+        }
+        Py_DecRef(value);
+        if (!ok) break;
+    }
+    if (core) Py_DecRef(core);
+    PyErr_Clear();
+    PyGILState_Release(gil);
+    return core && i == n;
+}
+
+/* Set `n` inputs of type `kind` to the Python objects pythonfmu would make of `values`; 0 if
+ * any is not an input read directly (pythonfmu sets them all then). */
+static int set_direct(Instance* inst, int kind, const fmi2ValueReference vr[], size_t n,
+                      const void* values) {
+    if (!inst->direct) return 0;
+    for (size_t i = 0; i < n; i++)
+        if (!direct_name(inst, WRITE, kind, vr[i])) return 0;
+    PyGILState_STATE gil = PyGILState_Ensure();
+    PyObject* core = PyObject_GetAttr(inst->slave, core_name);
+    size_t i = 0;
+    for (; core && i < n; i++) {
+        PyObject* value = kind == REAL ? PyFloat_FromDouble(((const fmi2Real*)values)[i])
+            : kind == INTEGER ? PyLong_FromLong(((const fmi2Integer*)values)[i])
+            : PyBool_FromLong(((const fmi2Boolean*)values)[i]);
+        int ok = value && PyObject_SetAttr(core, direct_name(inst, WRITE, kind, vr[i]),
+                                           value) == 0;
+        if (value) Py_DecRef(value);
+        if (!ok) break;
+    }
+    if (core) Py_DecRef(core);
+    PyErr_Clear();
+    PyGILState_Release(gil);
+    return core && i == n;
+}
+
+/* Under the GIL: the slave's log messages to the host, as pythonfmu passes them (each message
+ * through its logger, as a format: the adapter escapes '%'), then the queue emptied. */
+static void pass_messages(Instance* inst) {
+    long n = PyList_Size(inst->log_queue);
+    for (long i = 0; i < n; i++) {
+        PyObject* message = PyList_GetItem(inst->log_queue, i);   /* borrowed */
+        PyObject* status = message ? PyObject_GetAttrString(message, "status") : NULL;
+        PyObject* category = message ? PyObject_GetAttrString(message, "category") : NULL;
+        PyObject* text = message ? PyObject_GetAttrString(message, "msg") : NULL;
+        long level = status ? PyLong_AsLong(status) : fmi2Error;
+        const char* category_text = category ? PyUnicode_AsUTF8(category) : NULL;
+        const char* message_text = text ? PyUnicode_AsUTF8(text) : NULL;
+        PyErr_Clear();
+        if (level < fmi2OK || level > fmi2Pending) level = fmi2Error;
+        shim_logger(inst, inst->name, (fmi2Status)level, category_text,
+                    message_text ? message_text : "(a log message that is not text)");
+        if (status) Py_DecRef(status);
+        if (category) Py_DecRef(category);
+        if (text) Py_DecRef(text);
+    }
+    if (n > 0) PyList_SetSlice(inst->log_queue, 0, n, NULL);
+    PyErr_Clear();
+}
+
+/* The slave's do_step(t, h), as pythonfmu's fmi2DoStep calls it: fmi2OK if it returns true,
+ * fmi2Discard if false, fmi2Fatal with the exception if one escapes. */
+static fmi2Status do_step_direct(Instance* inst, fmi2Real t, fmi2Real h) {
+    PyGILState_STATE gil = PyGILState_Ensure();
+    PyObject* start = PyFloat_FromDouble(t);
+    PyObject* step = PyFloat_FromDouble(h);
+    PyObject* result = start && step
+        ? PyObject_CallMethodObjArgs(inst->slave, do_step_name, start, step, NULL) : NULL;
+    int ok = result ? PyObject_IsTrue(result) : -1;
+    char reason[1024] = "";
+    if (ok < 0) {
+        PyObject *type = NULL, *value = NULL, *traceback = NULL;
+        PyErr_Fetch(&type, &value, &traceback);
+        PyObject* text = value ? PyObject_Str(value) : NULL;
+        const char* utf8 = text ? PyUnicode_AsUTF8(text) : NULL;
+        snprintf(reason, sizeof reason, "%s", utf8 ? utf8 : "an exception without a message");
+        PyObject* held[] = {text, type, value, traceback};
+        for (size_t i = 0; i < sizeof held / sizeof *held; i++)
+            if (held[i]) Py_DecRef(held[i]);
+        PyErr_Clear();
+    }
+    PyObject* held[] = {result, start, step};
+    for (size_t i = 0; i < sizeof held / sizeof *held; i++)
+        if (held[i]) Py_DecRef(held[i]);
+    pass_messages(inst);
+    PyGILState_Release(gil);
+    if (ok < 0) {
+        log_own(inst, fmi2Fatal, "fmi2DoStep: the slave's do_step raised: %s", reason);
+        return fmi2Fatal;
+    }
+    return ok ? fmi2OK : fmi2Discard;
+}
+
 /* ---------------------------------------------------------------- life cycle */
 static Instance* take_pooled(fmi2String guid, const char* resources, fmi2Type type) {
     Instance* found = NULL;
@@ -664,7 +959,9 @@ EXPORT fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String 
     inst->resources = resources;
     inst->type = type;
     inst->logging = logging_on;
-    inst->inner = pythonfmu.fmi2Instantiate(name, type, guid, uri, &inst->own, visible, fmi2True);
+    inst->last_successful = NAN;
+    MAKING_SLAVE(inst, inst->inner = pythonfmu.fmi2Instantiate(name, type, guid, uri, &inst->own,
+                                                               visible, fmi2True));
     free(uri);
     if (!inst->inner) {
         destroy(inst);
@@ -674,11 +971,19 @@ EXPORT fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String 
     return inst;
 }
 
+/* pythonfmu's fmi2Reset, which makes a new slave object: direct access to that one. */
+static fmi2Status reset(Instance* inst) {
+    fmi2Status status;
+    drop_slave(inst);
+    inst->last_successful = NAN;
+    MAKING_SLAVE(inst, status = pythonfmu.fmi2Reset(inst->inner));
+    return status;
+}
+
 /* Keep a healthy instance for reuse (1); never once release_pythonfmu ran (0). */
 static int pool_instance(Instance* inst) {
     inst->worst = fmi2OK;
-    if (released || inst->broken || pythonfmu.fmi2Reset(inst->inner) != fmi2OK
-            || inst->worst > fmi2Warning)
+    if (released || inst->broken || reset(inst) != fmi2OK || inst->worst > fmi2Warning)
         return 0;
     inst->host.logger = NULL;   /* the host's callbacks end here */
     clear_categories(inst);
@@ -749,20 +1054,47 @@ static fmi2Status after_finalization(Instance* inst, const char* function) {
 
 FORWARD(fmi2SetupExperiment, (fmi2Boolean a, fmi2Real b, fmi2Real d, fmi2Boolean e, fmi2Real f),
         (a, b, d, e, f))
-FORWARD0(fmi2EnterInitializationMode)
-FORWARD0(fmi2ExitInitializationMode)
-FORWARD0(fmi2Terminate)
-FORWARD0(fmi2Reset)
+/* Direct access (see there) from the end of Initialization Mode to its next start, a reset
+ * or fmi2Terminate. */
+EXPORT fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
+    BEGIN(c)
+    inst->direct = 0;
+    END(pythonfmu.fmi2EnterInitializationMode(inst->inner))
+}
+
+EXPORT fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
+    BEGIN(c)
+    fmi2Status status = pythonfmu.fmi2ExitInitializationMode(inst->inner);
+    inst->direct = inst->slave && status <= fmi2Warning && inst->worst <= fmi2Warning;
+    END(status)
+}
+
+EXPORT fmi2Status fmi2Terminate(fmi2Component c) {
+    BEGIN(c)
+    inst->direct = 0;
+    END(pythonfmu.fmi2Terminate(inst->inner))
+}
+
+EXPORT fmi2Status fmi2Reset(fmi2Component c) {
+    BEGIN(c)
+    END(reset(inst))
+}
+
+#define DIRECT_OR_FORWARD(name, access, kind, constness, type) \
+    EXPORT fmi2Status name(fmi2Component c, const fmi2ValueReference v[], size_t n, \
+                           constness type x[]) { \
+        BEGIN(c) \
+        if (access(inst, kind, v, n, x)) return fmi2OK; \
+        END(pythonfmu.name(inst->inner, v, n, x)) \
+    }
+DIRECT_OR_FORWARD(fmi2GetReal, get_direct, REAL, , fmi2Real)
+DIRECT_OR_FORWARD(fmi2GetInteger, get_direct, INTEGER, , fmi2Integer)
+DIRECT_OR_FORWARD(fmi2GetBoolean, get_direct, BOOLEAN, , fmi2Boolean)
+DIRECT_OR_FORWARD(fmi2SetReal, set_direct, REAL, const, fmi2Real)
+DIRECT_OR_FORWARD(fmi2SetInteger, set_direct, INTEGER, const, fmi2Integer)
+DIRECT_OR_FORWARD(fmi2SetBoolean, set_direct, BOOLEAN, const, fmi2Boolean)
 FORWARD0(fmi2CancelStep)
-FORWARD(fmi2GetReal, (const fmi2ValueReference v[], size_t n, fmi2Real x[]), (v, n, x))
-FORWARD(fmi2GetInteger, (const fmi2ValueReference v[], size_t n, fmi2Integer x[]), (v, n, x))
-FORWARD(fmi2GetBoolean, (const fmi2ValueReference v[], size_t n, fmi2Boolean x[]), (v, n, x))
 FORWARD(fmi2GetString, (const fmi2ValueReference v[], size_t n, fmi2String x[]), (v, n, x))
-FORWARD(fmi2SetReal, (const fmi2ValueReference v[], size_t n, const fmi2Real x[]), (v, n, x))
-FORWARD(fmi2SetInteger, (const fmi2ValueReference v[], size_t n, const fmi2Integer x[]),
-        (v, n, x))
-FORWARD(fmi2SetBoolean, (const fmi2ValueReference v[], size_t n, const fmi2Boolean x[]),
-        (v, n, x))
 FORWARD(fmi2SetString, (const fmi2ValueReference v[], size_t n, const fmi2String x[]), (v, n, x))
 FORWARD(fmi2GetFMUstate, (fmi2FMUstate* s), (s))
 FORWARD(fmi2SetFMUstate, (fmi2FMUstate s), (s))
@@ -777,9 +1109,26 @@ FORWARD(fmi2SetRealInputDerivatives,
 FORWARD(fmi2GetRealOutputDerivatives,
         (const fmi2ValueReference v[], size_t n, const fmi2Integer o[], fmi2Real x[]),
         (v, n, o, x))
-FORWARD(fmi2DoStep, (fmi2Real t, fmi2Real h, fmi2Boolean flag), (t, h, flag))
 FORWARD(fmi2GetStatus, (const fmi2StatusKind k, fmi2Status* x), (k, x))
-FORWARD(fmi2GetRealStatus, (const fmi2StatusKind k, fmi2Real* x), (k, x))
+
+/* The last successful time is the shim's to answer: direct steps pass pythonfmu by. */
+EXPORT fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean flag) {
+    BEGIN(c)
+    fmi2Status status = inst->direct ? do_step_direct(inst, t, h)
+        : pythonfmu.fmi2DoStep(inst->inner, t, h, flag);
+    if (status == fmi2OK || status == fmi2Discard)
+        inst->last_successful = status == fmi2OK ? t + h : t;
+    END(status)
+}
+
+EXPORT fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind kind, fmi2Real* x) {
+    BEGIN(c)
+    if (kind == fmi2LastSuccessfulTime && x) {
+        *x = inst->last_successful;
+        return fmi2OK;
+    }
+    END(pythonfmu.fmi2GetRealStatus(inst->inner, kind, x))
+}
 FORWARD(fmi2GetIntegerStatus, (const fmi2StatusKind k, fmi2Integer* x), (k, x))
 FORWARD(fmi2GetBooleanStatus, (const fmi2StatusKind k, fmi2Boolean* x), (k, x))
 FORWARD(fmi2GetStringStatus, (const fmi2StatusKind k, fmi2String* x), (k, x))
