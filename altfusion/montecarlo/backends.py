@@ -27,13 +27,16 @@ def available_cores() -> int:
 
 class LocalWorkers:
     """``workers`` processes started with "spawn" (never fork a process that may have
-    embedded-Python FMUs loaded); each builds one simulation in its initializer."""
+    embedded-Python FMUs loaded); each builds one simulation in its initializer and waits for
+    the others to have built theirs (:func:`~altfusion.montecarlo.worker.initialize_worker`).
+    Every run is submitted at once, so the pool starts all ``workers`` processes."""
 
     def __init__(self, task: CampaignTask, workers: int):
         self.description = f"{workers} local worker process{'es' if workers > 1 else ''}"
-        self._executor = ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn"),
+        context = get_context("spawn")
+        self._executor = ProcessPoolExecutor(max_workers=workers, mp_context=context,
                                              initializer=initialize_worker,
-                                             initargs=(task.source,))
+                                             initargs=(task.source, context.Barrier(workers)))
 
     def submit(self, task: CampaignTask, index: int) -> Future:
         return self._executor.submit(execute_run, task, index)

@@ -58,8 +58,16 @@ def _end_with_parent(parent: int) -> None:
     os._exit(1)
 
 
-def initialize_worker(source: SystemSource) -> None:
-    """Initializer of local worker processes: build the simulation before the first run.
+READY_TIMEOUT = 60.0
+"""Seconds a local worker waits, once its simulation is built, for the other workers to have
+built theirs (then it starts taking runs anyway)."""
+
+
+def initialize_worker(source: SystemSource, ready: threading.Barrier | None = None) -> None:
+    """Initializer of local worker processes: build the simulation before the first run, then
+    wait at ``ready`` (a barrier of every worker of the pool) until each has built its own:
+    a worker whose start-up is slow (a busy machine) would otherwise find every run of a
+    short campaign taken by the first one ready.
 
     Workers ignore Ctrl-C: the parent process decides what happens to an interrupted
     campaign (it keeps every finished run and stops the workers). A watchdog thread ends the
@@ -70,6 +78,9 @@ def initialize_worker(source: SystemSource) -> None:
                      name="parent-watchdog").start()
     with contextlib.suppress(Exception):  # each run of this worker reports the error
         simulation_for(source)
+    if ready is not None:
+        with contextlib.suppress(threading.BrokenBarrierError):
+            ready.wait(READY_TIMEOUT)
 
 
 def execute_run(task: CampaignTask, index: int) -> RunRecord:

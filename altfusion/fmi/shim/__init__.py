@@ -6,8 +6,10 @@ pythonfmu 0.7.0's library segfaults on the resource URIs ``file:/p`` and
 freeing its instances later crashes), forwards no message while ``loggingOn`` is off and
 returns fmi2OK for failures the Python side can only log. Our shim, compiled here with the system C
 compiler, becomes ``binaries/linux64/<model identifier>.so``; pythonfmu's library moves beside
-it as :data:`PYTHONFMU_LIBRARY`, which the shim loads (``dlopen``) and forwards every FMI call
-to. The win64 binary stays pythonfmu's own. Design: DEVELOPERS.md, "The native shim".
+it as :data:`PYTHONFMU_LIBRARY`, which the shim loads (``dlopen``) and forwards FMI calls
+to; while an instance steps, the shim reads and sets its inputs and outputs and calls its
+``do_step`` itself, past pythonfmu's bridge. The win64 binary stays pythonfmu's own. Design:
+DEVELOPERS.md, "The native shim".
 """
 
 import os
