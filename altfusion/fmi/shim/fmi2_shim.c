@@ -1056,23 +1056,20 @@ FORWARD(fmi2SetupExperiment, (fmi2Boolean a, fmi2Real b, fmi2Real d, fmi2Boolean
         (a, b, d, e, f))
 /* Direct access (see there) from the end of Initialization Mode to its next start, a reset
  * or fmi2Terminate. */
-EXPORT fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
-    BEGIN(c)
-    inst->direct = 0;
-    END(pythonfmu.fmi2EnterInitializationMode(inst->inner))
-}
+#define ENDS_DIRECT_ACCESS(name) \
+    EXPORT fmi2Status name(fmi2Component c) { \
+        BEGIN(c) \
+        inst->direct = 0; \
+        END(pythonfmu.name(inst->inner)) \
+    }
+ENDS_DIRECT_ACCESS(fmi2EnterInitializationMode)
+ENDS_DIRECT_ACCESS(fmi2Terminate)
 
 EXPORT fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     BEGIN(c)
     fmi2Status status = pythonfmu.fmi2ExitInitializationMode(inst->inner);
     inst->direct = inst->slave && status <= fmi2Warning && inst->worst <= fmi2Warning;
     END(status)
-}
-
-EXPORT fmi2Status fmi2Terminate(fmi2Component c) {
-    BEGIN(c)
-    inst->direct = 0;
-    END(pythonfmu.fmi2Terminate(inst->inner))
 }
 
 EXPORT fmi2Status fmi2Reset(fmi2Component c) {
