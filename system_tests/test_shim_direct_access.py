@@ -1,8 +1,9 @@
 """The native shim's direct access (``altfusion/fmi/shim/fmi2_shim.c``, "direct access"): while
-an instance steps, fmi2Get/Set of inputs and outputs and fmi2DoStep reach the slave without
-pythonfmu's bridge, with the values and statuses pythonfmu's path gives; anything else
-(Initialization Mode, parameters, an output set by mistake, after fmi2Terminate) still goes
-through pythonfmu, and a reset instance is served with its new slave object.
+an instance steps, fmi2Get of inputs, outputs and parameters (strings included), fmi2Set of
+inputs and fmi2DoStep reach the slave without pythonfmu's bridge, with the values and statuses
+pythonfmu's path gives; anything else (Initialization Mode, an output set by mistake, after
+fmi2Terminate) still goes through pythonfmu, and a reset instance is served with its new slave
+object.
 
 Which path served a call is seen from the slave class's accessors, which pythonfmu calls and
 the shim does not: they are wrapped to count their calls."""
@@ -17,7 +18,8 @@ from pythonfmu.enums import Fmi2Status
 from altfusion.cosim.instances import CosimError, FmuInstance, fmu_info
 from altfusion.sensors.gnss import GnssReceiver
 
-ACCESSORS = ("get_real", "get_integer", "get_boolean", "set_real", "set_integer", "set_boolean")
+ACCESSORS = ("get_real", "get_integer", "get_boolean", "get_string", "set_real", "set_integer",
+             "set_boolean")
 FMI2_OK, FMI2_DISCARD, FMI2_FATAL = 0, 2, 4
 FMI2_LAST_SUCCESSFUL_TIME = 2
 
@@ -97,8 +99,12 @@ def test_while_stepping_inputs_and_outputs_bypass_pythonfmu_with_its_values(gnss
     assert instance.get("Real", [refs["h"], refs["vz"]]) == [100.0, 2.0]
     assert calls == []                                 # all of it direct
 
-    assert instance.get("Real", [refs["gps_h"], refs["step_size"]]) == [core.gps_h, 0.1]
-    assert calls == ["get_real"]                       # a parameter among them: pythonfmu
+    assert instance.get("Real", [refs["gps_h"], refs["step_size"], refs["sample_period"]]) \
+        == [core.gps_h, 0.1, core.params.sample_period]
+    assert instance.get("Integer", [refs["seed"], refs["gps_count"]]) == [3, 1]
+    assert instance.fmu.getString([refs["dop_mode"], refs["outage_windows"]]) \
+        == [core.params.dop_mode.encode(), core.params.outage_windows.encode()]
+    assert calls == []                                 # parameters too, strings too
     with pytest.raises(CosimError, match="setReal failed"):
         instance.set("Real", [refs["gps_h"]], [1.0])   # an output: pythonfmu refuses it
     assert calls[-1] == "set_real"

@@ -44,8 +44,8 @@ FMI behaviour that pythonfmu 0.7.0 leaves to us:
 * The native shim reads and writes the inputs and outputs itself while the instance steps,
   and calls :meth:`CoreSlave.do_step` without pythonfmu's bridge: each instance offers
   itself in the slot the shim leaves in ``sys`` (:data:`SHIM_SLOTS`) and names, by value
-  reference, the core attributes the shim may read and write (:meth:`CoreSlave._native_names`:
-  the inputs and outputs, which the accessors below read and write on the core as they are).
+  reference, the attributes the shim may read and write (:meth:`CoreSlave._native_names`: the
+  inputs, outputs and parameters, read as the accessors below read them; the inputs set).
 * In Initialization Mode, outputs follow the parameters and inputs set so far: a set marks the
   core stale and the next get rebuilds it. Importers may set parameters after
   ``enterInitializationMode`` (ECOS applies the SSP parameter set there) and then iterate their
@@ -107,8 +107,11 @@ SHIM_SLOTS = "_altfusion_fmi2_shim_slaves_v1"
 """The dict in ``sys`` where the native shim leaves a slot (None, keyed by the thread) for the
 slave object pythonfmu is making (``altfusion/fmi/shim/fmi2_shim.c``, "direct access")."""
 
-_NATIVE_TYPES = (Real, Integer, Boolean)
-"""The FMI types the native shim reads and writes directly, in its order."""
+_NATIVE_TYPES = (Real, Integer, Boolean, String)
+"""The FMI types the native shim reads (and, but strings, writes) directly, in its order."""
+
+_CORE, _PARAMETERS, _SLAVE = 0, 1, 2
+"""Whose attribute a value is, for the native shim (its CORE, PARAMETERS, SLAVE)."""
 
 MAX_CACHED_BATCHES = 256
 """Accessors kept per instance for distinct lists of value references (then made anew)."""
@@ -208,23 +211,38 @@ class CoreSlave(Fmi2Slave, metaclass=ReusedSlaveClass):
         if isinstance(slots, dict) and thread in slots and slots[thread] is None:
             slots[thread] = self
 
-    def _native_names(self) -> tuple[tuple[tuple[str, ...], ...], ...]:
-        """For the native shim: per way (read, write) and FMI type (Real, Integer, Boolean),
-        by value reference, the core attribute it may read or set directly ("" for none):
-        inputs and outputs are read, inputs set, as the accessors below do."""
+    def _native_names(self) -> tuple[tuple[tuple[tuple[int, str] | None, ...], ...], ...]:
+        """For the native shim: per way (read, write) and FMI type (Real, Integer, Boolean,
+        String), by value reference, whose attribute it may read or set directly and its name:
+        (0, name) of the core, (1, name) of the parameters, (2, name) of this slave; None for
+        none. Inputs and outputs are read from the core and parameters from theirs, inputs set
+        on the core, as the accessors below do (parameters are only set through their checked
+        setters, in Initialization Mode)."""
         size = max(self.vars, default=-1) + 1
-        declared = {v.name: isinstance(v, Input) for v in self.variables}
+        inputs = {v.name for v in self.variables if isinstance(v, Input)}
+        outputs = {v.name for v in self.variables} - inputs
+        parameters = {info.name for info in self.parameter_infos()} - {STEP_SIZE.name}
 
-        def table(kind: type, inputs_only: bool) -> tuple[str, ...]:
-            names = [""] * size
+        def read(name: str) -> tuple[int, str] | None:
+            if name in inputs or name in outputs:
+                return (_CORE, name)
+            if name in parameters:
+                return (_PARAMETERS, name)
+            return (_SLAVE, "_step_size") if name == STEP_SIZE.name else None
+
+        def write(name: str) -> tuple[int, str] | None:
+            return (_CORE, name) if name in inputs else None
+
+        def table(kind: type, where) -> tuple[tuple[int, str] | None, ...]:
+            names: list[tuple[int, str] | None] = [None] * size
             for vr, var in self.vars.items():
-                if isinstance(var, kind) and var.name in declared and (
-                        declared[var.name] or not inputs_only):
-                    names[vr] = var.name
+                if isinstance(var, kind):
+                    names[vr] = where(var.name)
             return tuple(names)
 
-        return tuple(tuple(table(kind, inputs_only) for kind in _NATIVE_TYPES)
-                     for inputs_only in (False, True))
+        return (tuple(table(kind, read) for kind in _NATIVE_TYPES),
+                tuple(table(kind, write) if kind is not String else (None,) * size
+                      for kind in _NATIVE_TYPES))
 
     def _class_guid(self) -> str:
         """The GUID of this FMU's interface, computed from the first (fresh) instance of the

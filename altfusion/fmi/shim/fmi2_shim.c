@@ -205,6 +205,8 @@ extern PyObject* PyTuple_GetItem(PyObject*, long);
 extern long PyUnicode_GetLength(PyObject*);
 extern long PyList_Size(PyObject*);
 extern PyObject* PyList_GetItem(PyObject*, long);
+extern PyObject* PyList_New(long);
+extern int PyList_SetItem(PyObject*, long, PyObject*);
 extern int PyList_SetSlice(PyObject*, long, long, PyObject*);
 extern PyObject* PyDict_New(void);
 extern PyObject* PyDict_GetItem(PyObject*, PyObject*);
@@ -226,7 +228,8 @@ extern int PyDict_DelItem(PyObject*, PyObject*);
 static struct { FORWARDED(MEMBER) void (*finalize)(void); } pythonfmu;
 
 /* ---------------------------------------------------------------- instances */
-enum { REAL, INTEGER, BOOLEAN, KINDS };   /* the FMI types of direct access */
+enum { REAL, INTEGER, BOOLEAN, STRING, KINDS };   /* the FMI types of direct access */
+enum { CORE, PARAMETERS, SLAVE, OWNERS };   /* whose attribute a value is */
 enum { READ, WRITE };
 
 typedef struct Instance {
@@ -246,8 +249,10 @@ typedef struct Instance {
     /* direct access (see there): */
     PyObject* slave;                     /* pythonfmu's slave object (a reference), or NULL */
     PyObject* tables;                    /* its _native_names(): what `names` borrows from */
-    PyObject** names[2][KINDS];          /* [read/write][type][vr]: the core attribute or NULL */
+    PyObject** names[2][KINDS];          /* [read/write][type][vr]: the attribute or NULL */
+    unsigned char* owners[2][KINDS];     /* ... of whom (CORE, PARAMETERS, SLAVE) */
     size_t n_names[2][KINDS];
+    PyObject* strings;                   /* the values of the last direct fmi2GetString */
     PyObject* log_queue;                 /* the slave's list of messages, pythonfmu's */
     int direct;                          /* stepping: values and steps go straight to it */
 } Instance;
@@ -648,11 +653,12 @@ static char* resource_folder(fmi2String location, char* error, size_t size) {
  * with a list of value references built anew, and each call also makes four strings to drain
  * the slave's log queue: ~13,000 instructions per call, more than the values cost. While an
  * instance steps (from fmi2ExitInitializationMode to fmi2EnterInitializationMode, fmi2Reset
- * or fmi2Terminate), the shim reads the core's attributes for the inputs and outputs and sets
- * the inputs' itself (what altfusion.fmi.slave's accessors do for them, with the conversions
- * pythonfmu makes), and calls the slave's do_step, passing its log messages on as pythonfmu
- * does. Anything else goes to pythonfmu as before: parameters, strings, a value that does not
- * convert (pythonfmu then logs why), Initialization Mode, a slave that is not a CoreSlave.
+ * or fmi2Terminate), the shim reads the inputs and outputs (the core's attributes) and the
+ * parameters (the parameter set's), strings included, and sets the inputs itself (what
+ * altfusion.fmi.slave's accessors do for them, with the conversions pythonfmu makes), and
+ * calls the slave's do_step, passing its log messages on as pythonfmu does. Anything else
+ * goes to pythonfmu as before: a parameter or output set, a value that does not convert
+ * (pythonfmu then logs why), Initialization Mode, a slave that is not a CoreSlave.
  *
  * The shim learns the slave object when pythonfmu makes it (fmi2Instantiate, fmi2Reset): it
  * leaves the calling thread a slot (None, keyed by threading.get_ident()) in a dict in `sys`
@@ -660,7 +666,8 @@ static char* resource_folder(fmi2String location, char* error, size_t size) {
  * the attribute names by value reference. */
 #define SLAVE_SLOTS "_altfusion_fmi2_shim_slaves_v1"
 
-static PyObject* core_name;      /* "core", interned */
+static PyObject* core_name;        /* "core", interned */
+static PyObject* parameters_name;  /* "_params", interned */
 static PyObject* do_step_name;   /* "do_step", interned */
 
 /* Under the GIL: a slot for the slave the calling thread is about to make; its key, or NULL. */
@@ -702,11 +709,13 @@ static void drop_slave(Instance* inst) {
     for (int way = READ; way <= WRITE; way++)
         for (int kind = 0; kind < KINDS; kind++) {
             free(inst->names[way][kind]);
+            free(inst->owners[way][kind]);
             inst->names[way][kind] = NULL;
+            inst->owners[way][kind] = NULL;
             inst->n_names[way][kind] = 0;
         }
-    PyObject* held[] = {inst->slave, inst->tables, inst->log_queue};
-    inst->slave = inst->tables = inst->log_queue = NULL;
+    PyObject* held[] = {inst->slave, inst->tables, inst->log_queue, inst->strings};
+    inst->slave = inst->tables = inst->log_queue = inst->strings = NULL;
     if (!held[0] || !python_alive()) return;   /* the interpreter took them with it */
     PyGILState_STATE gil = PyGILState_Ensure();
     for (size_t i = 0; i < sizeof held / sizeof *held; i++)
@@ -714,20 +723,29 @@ static void drop_slave(Instance* inst) {
     PyGILState_Release(gil);
 }
 
-/* Under the GIL: `table` (a tuple of names by value reference, "" for none) as an array. */
-static int name_array(PyObject* table, PyObject*** names, size_t* count) {
+/* Under the GIL: `table` (by value reference, None or (owner, attribute name)) as arrays. */
+static int name_array(PyObject* table, PyObject*** names, unsigned char** owners,
+                      size_t* count) {
     long n = table ? PyTuple_Size(table) : -1;
     if (n < 0) return 0;
     *names = calloc(n ? (size_t)n : 1, sizeof **names);
-    if (!*names) return 0;
+    *owners = calloc(n ? (size_t)n : 1, sizeof **owners);
+    if (!*names || !*owners) return 0;
     *count = (size_t)n;
-    for (long vr = 0; vr < n; vr++) {
-        PyObject* name = PyTuple_GetItem(table, vr);   /* borrowed from `tables` */
-        long length = name ? PyUnicode_GetLength(name) : -1;
-        if (length < 0) return 0;
-        (*names)[vr] = length ? name : NULL;
+    PyObject* none = Py_BuildValue("");
+    int ok = none != NULL;
+    for (long vr = 0; ok && vr < n; vr++) {
+        PyObject* entry = PyTuple_GetItem(table, vr);   /* borrowed from `tables` */
+        if (entry == none) continue;
+        PyObject* owner = entry && PyTuple_Size(entry) == 2 ? PyTuple_GetItem(entry, 0) : NULL;
+        PyObject* name = owner ? PyTuple_GetItem(entry, 1) : NULL;
+        long code = owner ? PyLong_AsLong(owner) : -1;
+        ok = name && PyUnicode_GetLength(name) > 0 && code >= 0 && code < OWNERS;
+        (*names)[vr] = name;
+        (*owners)[vr] = (unsigned char)code;
     }
-    return 1;
+    if (none) Py_DecRef(none);
+    return ok;
 }
 
 /* Under the GIL: take `slave` (a new reference) for direct access if it offers it. */
@@ -735,6 +753,7 @@ static void adopt_slave(Instance* inst, PyObject* slave) {
     if (!slave) return;
     inst->slave = slave;
     if (!core_name) core_name = PyUnicode_InternFromString("core");
+    if (!parameters_name) parameters_name = PyUnicode_InternFromString("_params");
     if (!do_step_name) do_step_name = PyUnicode_InternFromString("do_step");
     PyObject* method = PyObject_GetAttrString(slave, "_native_names");
     inst->tables = method ? PyObject_CallFunctionObjArgs(method, NULL) : NULL;
@@ -742,14 +761,14 @@ static void adopt_slave(Instance* inst, PyObject* slave) {
     method = PyObject_GetAttrString(slave, "_get_log_queue");
     inst->log_queue = method ? PyObject_CallFunctionObjArgs(method, NULL) : NULL;
     if (method) Py_DecRef(method);
-    int ready = core_name && do_step_name && inst->tables && inst->log_queue
+    int ready = core_name && parameters_name && do_step_name && inst->tables && inst->log_queue
         && PyTuple_Size(inst->tables) == 2 && PyList_Size(inst->log_queue) >= 0;
     for (int way = READ; ready && way <= WRITE; way++) {
         PyObject* by_kind = PyTuple_GetItem(inst->tables, way);
         ready = by_kind && PyTuple_Size(by_kind) == KINDS;
         for (int kind = 0; ready && kind < KINDS; kind++)
             ready = name_array(PyTuple_GetItem(by_kind, kind), &inst->names[way][kind],
-                               &inst->n_names[way][kind]);
+                               &inst->owners[way][kind], &inst->n_names[way][kind]);
     }
     PyErr_Clear();
     if (!ready) drop_slave(inst);   /* not one of ours: pythonfmu serves it */
@@ -775,17 +794,39 @@ static PyObject* direct_name(const Instance* inst, int way, int kind, fmi2ValueR
     return vr < inst->n_names[way][kind] ? inst->names[way][kind][vr] : NULL;
 }
 
-/* Read `n` values of type `kind` into `values`; 0 (nothing to report) if any cannot be read
+/* Under the GIL: the object whose attribute value reference `vr` is (a new reference, or
+ * NULL): the core, its parameters or the slave, each looked up once per call (`held`). */
+static PyObject* owner(const Instance* inst, int way, int kind, fmi2ValueReference vr,
+                       PyObject* held[OWNERS]) {
+    int code = inst->owners[way][kind][vr];
+    if (!held[code])
+        held[code] = code == CORE ? PyObject_GetAttr(inst->slave, core_name)
+            : code == PARAMETERS ? PyObject_GetAttr(inst->slave, parameters_name)
+            : (Py_IncRef(inst->slave), inst->slave);
+    return held[code];
+}
+
+static void release_owners(PyObject* held[OWNERS]) {
+    for (int code = 0; code < OWNERS; code++)
+        if (held[code]) Py_DecRef(held[code]);
+}
+
+/* Read `n` values of type `kind` into `values` (strings: kept until the next direct
+ * fmi2GetString, as pythonfmu keeps them); 0 (nothing to report) if any cannot be read
  * directly: pythonfmu reads them all then. */
 static int get_direct(Instance* inst, int kind, const fmi2ValueReference vr[], size_t n,
                       void* values) {
     if (!inst->direct) return 0;
+    for (size_t i = 0; i < n; i++)
+        if (!direct_name(inst, READ, kind, vr[i])) return 0;
     PyGILState_STATE gil = PyGILState_Ensure();
-    PyObject* core = PyObject_GetAttr(inst->slave, core_name);
+    PyObject* held[OWNERS] = {NULL, NULL, NULL};
+    PyObject* strings = kind == STRING ? PyList_New((long)n) : NULL;
     size_t i = 0;
-    for (; core && i < n; i++) {
-        PyObject* name = direct_name(inst, READ, kind, vr[i]);
-        PyObject* value = name ? PyObject_GetAttr(core, name) : NULL;
+    for (; (kind != STRING || strings) && i < n; i++) {
+        PyObject* object = owner(inst, READ, kind, vr[i], held);
+        PyObject* value = object ? PyObject_GetAttr(object, direct_name(inst, READ, kind, vr[i]))
+            : NULL;
         if (!value) break;
         int ok;
         if (kind == REAL) {             /* float(value), as the adapter converts */
@@ -796,18 +837,33 @@ static int get_direct(Instance* inst, int kind, const fmi2ValueReference vr[], s
             long x = PyLong_AsLong(value);
             ok = x != -1 || !PyErr_Occurred();
             ((fmi2Integer*)values)[i] = (fmi2Integer)x;
-        } else {                        /* bool(value) */
+        } else if (kind == BOOLEAN) {   /* bool(value) */
             int x = PyObject_IsTrue(value);
             ok = x >= 0;
             ((fmi2Boolean*)values)[i] = x;
+        } else {                        /* a str, UTF-8 (pythonfmu's encoding) */
+            const char* text = PyUnicode_AsUTF8(value);
+            ok = text != NULL;
+            ((fmi2String*)values)[i] = text;
+            if (ok) {
+                Py_IncRef(value);
+                PyList_SetItem(strings, (long)i, value);   /* steals; keeps `text` alive */
+            }
         }
         Py_DecRef(value);
         if (!ok) break;
     }
-    if (core) Py_DecRef(core);
+    release_owners(held);
+    int done = i == n;
+    if (kind == STRING && done) {
+        if (inst->strings) Py_DecRef(inst->strings);
+        inst->strings = strings;
+    } else if (strings) {
+        Py_DecRef(strings);
+    }
     PyErr_Clear();
     PyGILState_Release(gil);
-    return core && i == n;
+    return done;
 }
 
 /* Set `n` inputs of type `kind` to the Python objects pythonfmu would make of `values`; 0 if
@@ -818,21 +874,22 @@ static int set_direct(Instance* inst, int kind, const fmi2ValueReference vr[], s
     for (size_t i = 0; i < n; i++)
         if (!direct_name(inst, WRITE, kind, vr[i])) return 0;
     PyGILState_STATE gil = PyGILState_Ensure();
-    PyObject* core = PyObject_GetAttr(inst->slave, core_name);
+    PyObject* held[OWNERS] = {NULL, NULL, NULL};
     size_t i = 0;
-    for (; core && i < n; i++) {
+    for (; i < n; i++) {
+        PyObject* object = owner(inst, WRITE, kind, vr[i], held);
         PyObject* value = kind == REAL ? PyFloat_FromDouble(((const fmi2Real*)values)[i])
             : kind == INTEGER ? PyLong_FromLong(((const fmi2Integer*)values)[i])
             : PyBool_FromLong(((const fmi2Boolean*)values)[i]);
-        int ok = value && PyObject_SetAttr(core, direct_name(inst, WRITE, kind, vr[i]),
-                                           value) == 0;
+        int ok = object && value
+            && PyObject_SetAttr(object, direct_name(inst, WRITE, kind, vr[i]), value) == 0;
         if (value) Py_DecRef(value);
         if (!ok) break;
     }
-    if (core) Py_DecRef(core);
+    release_owners(held);
     PyErr_Clear();
     PyGILState_Release(gil);
-    return core && i == n;
+    return i == n;
 }
 
 /* Under the GIL: the slave's log messages to the host, as pythonfmu passes them (each message
@@ -1100,7 +1157,7 @@ DIRECT_OR_FORWARD(fmi2SetReal, set_direct, REAL, const, fmi2Real)
 DIRECT_OR_FORWARD(fmi2SetInteger, set_direct, INTEGER, const, fmi2Integer)
 DIRECT_OR_FORWARD(fmi2SetBoolean, set_direct, BOOLEAN, const, fmi2Boolean)
 FORWARD0(fmi2CancelStep)
-FORWARD(fmi2GetString, (const fmi2ValueReference v[], size_t n, fmi2String x[]), (v, n, x))
+DIRECT_OR_FORWARD(fmi2GetString, get_direct, STRING, , fmi2String)
 FORWARD(fmi2SetString, (const fmi2ValueReference v[], size_t n, const fmi2String x[]), (v, n, x))
 FORWARD(fmi2GetFMUstate, (fmi2FMUstate* s), (s))
 FORWARD(fmi2SetFMUstate, (fmi2FMUstate s), (s))
