@@ -44,8 +44,9 @@ FMI behaviour that pythonfmu 0.7.0 leaves to us:
 * The native shim reads every variable (strings included) and sets the inputs itself while
   the instance steps, and calls :meth:`CoreSlave.do_step` without pythonfmu's bridge: each
   instance offers itself in the slot the shim leaves in ``sys`` (:data:`SHIM_SLOTS`) and
-  names, by value reference, the attributes the shim may read and write (:meth:`CoreSlave._native_names`: the
-  inputs, outputs and parameters, read as the accessors below read them; the inputs set).
+  names, by value reference, the attributes the shim may read and write
+  (:meth:`CoreSlave._native_names`: the inputs, outputs and parameters, read as the accessors
+  below read them; the inputs set).
 * In Initialization Mode, outputs follow the parameters and inputs set so far: a set marks the
   core stale and the next get rebuilds it. Importers may set parameters after
   ``enterInitializationMode`` (ECOS applies the SSP parameter set there) and then iterate their
