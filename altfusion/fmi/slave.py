@@ -112,7 +112,8 @@ _NATIVE_TYPES = (Real, Integer, Boolean, String)
 """The FMI types the native shim reads (and, but strings, writes) directly, in its order."""
 
 _CORE, _PARAMETERS, _SLAVE = 0, 1, 2
-"""Whose attribute a value is, for the native shim (its CORE, PARAMETERS, SLAVE)."""
+"""Whose attribute a variable's value is (:meth:`CoreSlave._home`; the native shim's CORE,
+PARAMETERS, SLAVE)."""
 
 MAX_CACHED_BATCHES = 256
 """Accessors kept per instance for distinct lists of value references (then made anew)."""
@@ -188,7 +189,7 @@ class CoreSlave(Fmi2Slave, metaclass=ReusedSlaveClass):
         self.core = self.core_class()
         for info in self.parameter_infos():
             self._register(info.name, info.type, Fmi2Causality.parameter, Fmi2Variability.fixed,
-                           info.description, getter=self._param_getter(info.name),
+                           info.description, getter=self._getter(info.name),
                            setter=self._param_setter(info.name))
         for var in self.variables:
             causality = Fmi2Causality.input if isinstance(var, Input) else Fmi2Causality.output
@@ -196,7 +197,7 @@ class CoreSlave(Fmi2Slave, metaclass=ReusedSlaveClass):
             variability = Fmi2Variability.continuous if continuous else Fmi2Variability.discrete
             setter = self._input_setter(var) if isinstance(var, Input) else None
             self._register(var.name, var.type, causality, variability, var.description,
-                           getter=self._core_getter(var.name), setter=setter)
+                           getter=self._getter(var.name), setter=setter)
         self._getters, self._setters = {}, {}
         for kind in _FMI_TYPES.values():
             self._getters[kind], self._setters[kind] = self._accessors(kind)
@@ -214,36 +215,22 @@ class CoreSlave(Fmi2Slave, metaclass=ReusedSlaveClass):
 
     def _native_names(self) -> tuple[tuple[tuple[tuple[int, str] | None, ...], ...], ...]:
         """For the native shim: per way (read, write) and FMI type (Real, Integer, Boolean,
-        String), by value reference, whose attribute it may read or set directly and its name:
-        (0, name) of the core, (1, name) of the parameters, (2, name) of this slave; None for
-        none. Inputs and outputs are read from the core and parameters from theirs, inputs set
-        on the core, as the accessors below do (parameters are only set through their checked
-        setters, in Initialization Mode)."""
+        String), by value reference, where it may read or set the value directly
+        (:meth:`_home`: the getters read every variable there), None for nowhere. Only inputs
+        are set directly (parameters go through their checked setters, in Initialization
+        Mode); the shim sets no strings."""
         size = max(self.vars, default=-1) + 1
         inputs = {v.name for v in self.variables if isinstance(v, Input)}
-        outputs = {v.name for v in self.variables} - inputs
-        parameters = {info.name for info in self.parameter_infos()} - {STEP_SIZE.name}
 
-        def read(name: str) -> tuple[int, str] | None:
-            if name in inputs or name in outputs:
-                return (_CORE, name)
-            if name in parameters:
-                return (_PARAMETERS, name)
-            return (_SLAVE, "_step_size") if name == STEP_SIZE.name else None
-
-        def write(name: str) -> tuple[int, str] | None:
-            return (_CORE, name) if name in inputs else None
-
-        def table(kind: type, where) -> tuple[tuple[int, str] | None, ...]:
-            names: list[tuple[int, str] | None] = [None] * size
+        def table(kind: type, write: bool) -> tuple[tuple[int, str] | None, ...]:
+            homes: list[tuple[int, str] | None] = [None] * size
             for vr, var in self.vars.items():
-                if isinstance(var, kind):
-                    names[vr] = where(var.name)
-            return tuple(names)
+                if isinstance(var, kind) and (not write or var.name in inputs):
+                    homes[vr] = self._home(var.name)
+            return tuple(homes)
 
-        return (tuple(table(kind, read) for kind in _NATIVE_TYPES),
-                tuple(table(kind, write) if kind is not String else (None,) * size
-                      for kind in _NATIVE_TYPES))
+        return tuple(tuple(table(kind, write) for kind in _NATIVE_TYPES)
+                     for write in (False, True))
 
     def _class_guid(self) -> str:
         """The GUID of this FMU's interface, computed from the first (fresh) instance of the
@@ -277,10 +264,22 @@ class CoreSlave(Fmi2Slave, metaclass=ReusedSlaveClass):
                      getter=getter, setter=setter)
         )
 
-    def _param_getter(self, name: str):
+    def _home(self, name: str) -> tuple[int, str]:
+        """Where variable ``name``'s value lives, as (owner, attribute): an input or output on
+        the core, ``step_size`` on this slave, another parameter in the parameter set."""
         if name == STEP_SIZE.name:
-            return lambda: self._step_size
-        return lambda: getattr(self._params, name)
+            return _SLAVE, "_step_size"
+        if any(var.name == name for var in self.variables):
+            return _CORE, name
+        return _PARAMETERS, name
+
+    def _owner(self, code: int) -> Any:
+        """The object of :meth:`_home`'s owner ``code``."""
+        return self.core if code == _CORE else self._params if code == _PARAMETERS else self
+
+    def _getter(self, name: str):
+        code, attribute = self._home(name)
+        return lambda: getattr(self._owner(code), attribute)
 
     def _param_setter(self, name: str):
         def set_value(value: Any) -> None:
@@ -291,9 +290,6 @@ class CoreSlave(Fmi2Slave, metaclass=ReusedSlaveClass):
                                                                      value)})
             self._stale = self._initializing
         return set_value
-
-    def _core_getter(self, name: str):
-        return lambda: getattr(self.core, name)
 
     def _input_setter(self, var: Input):
         def set_value(value: Any) -> None:

@@ -666,9 +666,25 @@ static char* resource_folder(fmi2String location, char* error, size_t size) {
  * the attribute names by value reference. */
 #define SLAVE_SLOTS "_altfusion_fmi2_shim_slaves_v1"
 
+static PyObject* none;             /* None */
 static PyObject* core_name;        /* "core", interned */
 static PyObject* parameters_name;  /* "_params", interned */
 static PyObject* do_step_name;   /* "do_step", interned */
+
+/* Under the GIL: the objects the shim names, made once (0 if one cannot be). */
+static int names_made(void) {
+    if (!none) none = Py_BuildValue("");
+    if (!core_name) core_name = PyUnicode_InternFromString("core");
+    if (!parameters_name) parameters_name = PyUnicode_InternFromString("_params");
+    if (!do_step_name) do_step_name = PyUnicode_InternFromString("do_step");
+    return none && core_name && parameters_name && do_step_name;
+}
+
+/* Under the GIL: release each of `count` references that is not NULL. */
+static void release(PyObject* const objects[], size_t count) {
+    for (size_t i = 0; i < count; i++)
+        if (objects[i]) Py_DecRef(objects[i]);
+}
 
 /* Under the GIL: a slot for the slave the calling thread is about to make; its key, or NULL. */
 static PyObject* open_slot(void) {
@@ -679,12 +695,10 @@ static PyObject* open_slot(void) {
         if (made) Py_DecRef(made);                     /* sys holds it */
     }
     PyObject* key = PyLong_FromUnsignedLong((unsigned long)pthread_self());
-    PyObject* none = Py_BuildValue("");
-    if (!slots || !key || !none || PyDict_SetItem(slots, key, none) != 0) {
+    if (!names_made() || !slots || !key || PyDict_SetItem(slots, key, none) != 0) {
         if (key) Py_DecRef(key);
         key = NULL;
     }
-    if (none) Py_DecRef(none);
     PyErr_Clear();
     return key;
 }
@@ -694,11 +708,9 @@ static PyObject* close_slot(PyObject* key) {
     if (!key) return NULL;
     PyObject* slots = PySys_GetObject(SLAVE_SLOTS);
     PyObject* found = slots ? PyDict_GetItem(slots, key) : NULL;   /* borrowed */
-    PyObject* none = Py_BuildValue("");
     PyObject* slave = found && found != none ? found : NULL;
     if (slave) Py_IncRef(slave);
     if (found) PyDict_DelItem(slots, key);
-    if (none) Py_DecRef(none);
     Py_DecRef(key);
     PyErr_Clear();
     return slave;
@@ -718,8 +730,7 @@ static void drop_slave(Instance* inst) {
     inst->slave = inst->tables = inst->log_queue = inst->strings = NULL;
     if (!held[0] || !python_alive()) return;   /* the interpreter took them with it */
     PyGILState_STATE gil = PyGILState_Ensure();
-    for (size_t i = 0; i < sizeof held / sizeof *held; i++)
-        if (held[i]) Py_DecRef(held[i]);
+    release(held, sizeof held / sizeof *held);
     PyGILState_Release(gil);
 }
 
@@ -732,8 +743,7 @@ static int name_array(PyObject* table, PyObject*** names, unsigned char** owners
     *owners = calloc(n ? (size_t)n : 1, sizeof **owners);
     if (!*names || !*owners) return 0;
     *count = (size_t)n;
-    PyObject* none = Py_BuildValue("");
-    int ok = none != NULL;
+    int ok = 1;
     for (long vr = 0; ok && vr < n; vr++) {
         PyObject* entry = PyTuple_GetItem(table, vr);   /* borrowed from `tables` */
         if (entry == none) continue;
@@ -744,7 +754,6 @@ static int name_array(PyObject* table, PyObject*** names, unsigned char** owners
         (*names)[vr] = name;
         (*owners)[vr] = (unsigned char)code;
     }
-    if (none) Py_DecRef(none);
     return ok;
 }
 
@@ -752,16 +761,13 @@ static int name_array(PyObject* table, PyObject*** names, unsigned char** owners
 static void adopt_slave(Instance* inst, PyObject* slave) {
     if (!slave) return;
     inst->slave = slave;
-    if (!core_name) core_name = PyUnicode_InternFromString("core");
-    if (!parameters_name) parameters_name = PyUnicode_InternFromString("_params");
-    if (!do_step_name) do_step_name = PyUnicode_InternFromString("do_step");
     PyObject* method = PyObject_GetAttrString(slave, "_native_names");
     inst->tables = method ? PyObject_CallFunctionObjArgs(method, NULL) : NULL;
     if (method) Py_DecRef(method);
     method = PyObject_GetAttrString(slave, "_get_log_queue");
     inst->log_queue = method ? PyObject_CallFunctionObjArgs(method, NULL) : NULL;
     if (method) Py_DecRef(method);
-    int ready = core_name && parameters_name && do_step_name && inst->tables && inst->log_queue
+    int ready = names_made() && inst->tables && inst->log_queue
         && PyTuple_Size(inst->tables) == 2 && PyList_Size(inst->log_queue) >= 0;
     for (int way = READ; ready && way <= WRITE; way++) {
         PyObject* by_kind = PyTuple_GetItem(inst->tables, way);
@@ -806,11 +812,6 @@ static PyObject* owner(const Instance* inst, int way, int kind, fmi2ValueReferen
     return held[code];
 }
 
-static void release_owners(PyObject* held[OWNERS]) {
-    for (int code = 0; code < OWNERS; code++)
-        if (held[code]) Py_DecRef(held[code]);
-}
-
 /* Read `n` values of type `kind` into `values` (strings: kept until the next direct
  * fmi2GetString, as pythonfmu keeps them); 0 (nothing to report) if any cannot be read
  * directly: pythonfmu reads them all then. */
@@ -853,7 +854,7 @@ static int get_direct(Instance* inst, int kind, const fmi2ValueReference vr[], s
         Py_DecRef(value);
         if (!ok) break;
     }
-    release_owners(held);
+    release(held, OWNERS);
     int done = i == n;
     if (kind == STRING && done) {
         if (inst->strings) Py_DecRef(inst->strings);
@@ -886,7 +887,7 @@ static int set_direct(Instance* inst, int kind, const fmi2ValueReference vr[], s
         if (value) Py_DecRef(value);
         if (!ok) break;
     }
-    release_owners(held);
+    release(held, OWNERS);
     PyErr_Clear();
     PyGILState_Release(gil);
     return i == n;
@@ -933,13 +934,11 @@ static fmi2Status do_step_direct(Instance* inst, fmi2Real t, fmi2Real h) {
         const char* utf8 = text ? PyUnicode_AsUTF8(text) : NULL;
         snprintf(reason, sizeof reason, "%s", utf8 ? utf8 : "an exception without a message");
         PyObject* held[] = {text, type, value, traceback};
-        for (size_t i = 0; i < sizeof held / sizeof *held; i++)
-            if (held[i]) Py_DecRef(held[i]);
+        release(held, sizeof held / sizeof *held);
         PyErr_Clear();
     }
     PyObject* held[] = {result, start, step};
-    for (size_t i = 0; i < sizeof held / sizeof *held; i++)
-        if (held[i]) Py_DecRef(held[i]);
+    release(held, sizeof held / sizeof *held);
     pass_messages(inst);
     PyGILState_Release(gil);
     if (ok < 0) {
