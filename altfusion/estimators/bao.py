@@ -73,16 +73,12 @@ Scenarios of the paper (for the systems that will reproduce them):
 import math
 from dataclasses import dataclass
 
-import numpy as np
-
 from altfusion.constants import G0, ISA_LAPSE_RATE, ISA_P0, ISA_T0, R_AIR
 from altfusion.estimators.base import Estimator, HealthParams, Verdict
-from altfusion.estimators.kalman import predict, update
+from altfusion.estimators.kalman import update_one_state
 from altfusion.estimators.streams import BARO_P, GPS_QUALITY, Stream
 from altfusion.params import param
 from altfusion.physics.barometric import height_from_pressure
-
-ONE = np.array([[1.0]])
 
 
 def principle_error(H: float, H0: float, p0: float, T0: float, p0_actual: float,
@@ -163,8 +159,7 @@ class BaoDriftEstimator(Estimator):
 
     def initialize_filter(self) -> None:
         p = self.params
-        self.x = np.zeros(1)
-        self.P = np.array([[p.P0_drift]])
+        self.x, self.P = 0.0, p.P0_drift          # the drift filter's state and variance
         self.h_baro = float(self.baro_h)
         self._baro_time = self._baro_accepted = float(self.baro_time)
         self.h_baro_corrected = self.h_baro
@@ -182,7 +177,7 @@ class BaoDriftEstimator(Estimator):
         Q = self.params.drift_psd * dt                                          # (12)
         if self.started and self.params.fault_detection:
             Q += self._held_baro_motion(dt)
-        self.x, self.P = predict(self.x, self.P, ONE, np.array([[Q]]))
+        self.P += Q                                            # F = [1]: x⁻ = x, P⁻ = P + Q
         self._publish()
 
     def fuse(self, stream: Stream, sample: dict[str, float]) -> None:
@@ -233,12 +228,11 @@ class BaoDriftEstimator(Estimator):
         else:
             R = p.R_gps
         z = h_gps - self.h_baro_corrected                                       # (13)
-        innovation = z - float(self.x[0])
-        variance = float(self.P[0, 0]) + R
+        innovation = z - self.x
+        variance = self.P + R
         if self.gate(self.aid["gps"], innovation, variance, p.gate_sigma) is not Verdict.FUSED:
             return
-        result = update(self.x, self.P, z, ONE, R)
-        self.x, self.P = result.x, result.P
+        self.x, self.P, _ = update_one_state(self.x, self.P, z, R)
         self.R, self.gps_std = R, math.sqrt(R)
         self.innovation = innovation
 
@@ -257,11 +251,11 @@ class BaoDriftEstimator(Estimator):
             self.h_baro += innovation
             self.h_baro_corrected += innovation
         else:
-            self.x, self.P = self.x + innovation, np.array([[variance]])
+            self.x, self.P = self.x + innovation, variance
 
     def _publish(self) -> None:
-        self.drift = float(self.x[0])
-        self.drift_std = math.sqrt(float(self.P[0, 0]))
+        self.drift = self.x
+        self.drift_std = math.sqrt(self.P)
         self.h_est = self.h_baro_corrected + self.drift
         self.vz_est = 0.0
-        self.h_std = math.sqrt(float(self.P[0, 0]) + self.params.R_baro)
+        self.h_std = math.sqrt(self.P + self.params.R_baro)

@@ -100,11 +100,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from altfusion.estimators.base import Estimator, HealthParams, Verdict
-from altfusion.estimators.kalman import update
+from altfusion.estimators.kalman import update_one_state
 from altfusion.estimators.streams import BARO, GPS, Stream
 from altfusion.params import param
-
-H = np.array([[1.0]])
 
 
 @dataclass(frozen=True)
@@ -196,11 +194,10 @@ class HajiyevAdaptiveEstimator(Estimator):
         """Eqs. (27), (31): the Kalman update of the height ``prior`` of variance
         ``variance`` by h^GPS (variance R_GPS); the correction from h_B held until the next
         fusion (eq. 15)."""
-        result = update(np.array([prior]), np.array([[variance]]), h_gps, H,
-                        self.params.R_gps)                                      # (27), (31)
-        self.gain = float(result.K[0, 0])
-        self.correction = float(result.x[0]) - self.baro
-        self.variance = self._fused_variance = float(result.P[0, 0])
+        h, P, self.gain = update_one_state(prior, variance, h_gps,
+                                           self.params.R_gps)                   # (27), (31)
+        self.correction = h - self.baro
+        self.variance = self._fused_variance = P
         self._fused_time = self.time
         self._publish()
 

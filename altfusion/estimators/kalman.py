@@ -113,6 +113,59 @@ Vector = Sequence[float]
 Matrix = Sequence[Sequence[float]]
 
 
+# ------------------------------------------- the same floats, without the arrays
+# BLAS sums a matrix product's terms with fused multiply-adds in its own order, so float
+# arithmetic rarely gives its floats. It does where each entry of the products in
+# :func:`update` and :func:`joseph` is one product, or one product plus a term times 1 (the
+# other terms times 0): a filter of one state, and a measurement of the first of two
+# states (H = [1, 0]). There a fused multiply-add rounds once where float arithmetic rounds
+# once too, and the order cannot matter: the floats are the same on any BLAS
+# (tests/test_kalman.py), without the arrays' cost.
+
+
+def update_one_state(x: float, P: float, z: float, R: float, gain_scale: float = 1.0,
+                     ) -> tuple[float, float, float]:
+    """:func:`update` of a one-state filter (H = [1]) on floats: x, P and the gain K, the
+    floats :func:`update` gives for 1x1 arrays.
+
+        S = P⁻ + R,  K = gain_scale·P⁻/S,  x = x⁻ + K (z - x⁻),
+        P = (1 - K) P⁻ (1 - K) + K R K                                 (Joseph form)
+    """
+    K = (gain_scale / (P + R)) * P
+    I_KH = 1.0 - K
+    return x + K * (z - x), I_KH * P * I_KH + K * R * K, K
+
+
+def update_first_of_two(x: Vector, P: Matrix, z: float, R: float,
+                        ) -> tuple[list[float], list[list[float]], list[float]]:
+    """:func:`update` of a two-state filter by a measurement of its first state
+    (H = [1, 0]) on floats: x, P and the gain K, the floats :func:`update` gives for these
+    arrays (section above); :func:`joseph_first_of_two` is its covariance."""
+    (x0, x1), (p00, p01) = x, P[0]
+    scale = 1.0 / (p00 + R)
+    K = [scale * p00, scale * p01]
+    y = z - x0
+    return [x0 + K[0] * y, x1 + K[1] * y], joseph_first_of_two(P, K, R), K
+
+
+def joseph_first_of_two(P: Matrix, K: Vector, R: float) -> list[list[float]]:
+    """:func:`joseph` of a two-state filter for H = [1, 0] on floats, the floats it gives
+    for these arrays: with I - K H = [[1 - K₀, 0], [-K₁, 1]] each entry of M = (I - K H) P⁻
+    is one product or a product and P⁻'s own entry, and so is each of A = M (I - K H)ᵀ;
+    then A + K R Kᵀ, symmetrized."""
+    (p00, p01), (p10, p11) = P
+    k0, k1 = K
+    i00 = 1.0 - k0
+    m00, m01 = i00 * p00, i00 * p01                      # M = (I - K H) P⁻
+    m10, m11 = p10 - k1 * p00, p11 - k1 * p01
+    kr0, kr1 = k0 * R, k1 * R                            # K R
+    a00 = m00 * i00 + kr0 * k0                           # M (I - K H)ᵀ + K R Kᵀ
+    a01 = m01 - m00 * k1 + kr0 * k1
+    a10 = m10 * i00 + kr1 * k0
+    a11 = m11 - m10 * k1 + kr1 * k1
+    return [[0.5 * (a00 + a00), 0.5 * (a01 + a10)], [0.5 * (a10 + a01), 0.5 * (a11 + a11)]]
+
+
 def white_jerk_noise(dt: float, jerk_psd: float) -> Matrix:
     """Q = q·∫ φφᵀ, φ = [t²/2, t, 1]: the process noise over dt of a white jerk of spectral
     density q acting on (position, speed, acceleration)."""

@@ -71,12 +71,17 @@ import numpy as np
 
 from altfusion.constants import ISA_LAPSE_RATE, ISA_T0
 from altfusion.estimators.base import Estimator, HealthParams, Verdict
-from altfusion.estimators.kalman import decorrelate, joseph, predict, shift_state, update
+from altfusion.estimators.kalman import (
+    decorrelate,
+    joseph_first_of_two,
+    predict,
+    shift_state,
+    update_first_of_two,
+    update_one_state,
+)
 from altfusion.estimators.streams import BARO_T, GPS
 from altfusion.params import param
 
-ONE = np.array([[1.0]])
-H_ALPHA_BETA = np.array([[1.0, 0.0]])
 MIN_LEVER = 1.0
 """Below this height above H0 (m) the GPS carries no scale-factor information (eq. 23): a
 deviation from the paper (module documentation)."""
@@ -193,9 +198,8 @@ class WhangGAEstimator(Estimator):
         self.lambda_meas = sign * (temperature - p.lapse_rate * lever - p.T0) / p.T0   # (6)
         variance = (p.R_temperature + p.lapse_rate**2 * self.P[0, 0]
                     + lever**2 * p.lapse_rate_var) / p.T0**2                        # (7)
-        result = update(np.array([self.a]), np.array([[self.P_a]]), self.lambda_meas, ONE,
-                        variance)                                               # (20)-(22)
-        self.a, self.P_a = float(result.x[0]), float(result.P[0, 0])
+        self.a, self.P_a, _ = update_one_state(self.a, self.P_a, self.lambda_meas,
+                                               variance)                        # (20)-(22)
 
     def _gps_update(self, h_gps: float) -> None:
         """The z-update (eqs. 23-31), once an air-data sample gives h^B (a deviation)."""
@@ -218,13 +222,10 @@ class WhangGAEstimator(Estimator):
         if abs(lever) >= MIN_LEVER:
             z_a = (z - self.b) / lever                                          # (23)
             S_a = (self.P_b + R) / lever**2
-            result = update(np.array([self.a]), np.array([[self.P_a]]), z_a, ONE, S_a)
-            self.a, self.P_a = float(result.x[0]), float(result.P[0, 0])        # (25), (26)
+            self.a, self.P_a, _ = update_one_state(self.a, self.P_a, z_a, S_a)  # (25), (26)
         z_b = z - lever * self.a                                                # (30)
-        result = update(np.array([self.b]), np.array([[self.P_b]]), z_b, ONE, R)   # (27)-(29)
-        gain = float(result.K[0, 0])
-        self.b = float(result.x[0])
-        self.P_b = float(result.P[0, 0]) + (gain * lever) ** 2 * self.P_a       # (31)
+        self.b, P_b, gain = update_one_state(self.b, self.P_b, z_b, R)          # (27)-(29)
+        self.P_b = P_b + (gain * lever) ** 2 * self.P_a                         # (31)
 
     def _compensated(self, h_baro: float) -> tuple[float, float]:
         """Eq. (32) and the R_h of eq. (34): h^c and its variance."""
@@ -234,7 +235,7 @@ class WhangGAEstimator(Estimator):
                / (1.0 + self.a) ** 2)
         return h_comp, R_h
 
-    def _compensate(self) -> tuple[float, np.ndarray | None]:
+    def _compensate(self) -> tuple[float, list[float] | None]:
         """Eq. (32) and the alpha-beta filter update (eq. 34) with its R_h; the filter starts
         at the first compensated height. Returns R_h and the gain K of eq. (34) (None at
         the start)."""
@@ -245,12 +246,12 @@ class WhangGAEstimator(Estimator):
             return R_h, None
         return R_h, self._alpha_beta_update(self.h_comp, R_h)
 
-    def _alpha_beta_update(self, z: float, R: float) -> np.ndarray:
-        """Eq. (34): the alpha-beta filter updated by the height z of variance R; returns
-        its gain K."""
-        result = update(self.x, self.P, z, H_ALPHA_BETA, R)
-        self.x, self.P = result.x, result.P
-        return result.K
+    def _alpha_beta_update(self, z: float, R: float) -> list[float]:
+        """Eq. (34): the alpha-beta filter updated by the height z of variance R (H = [1, 0]);
+        returns its gain K."""
+        x, P, K = update_first_of_two(self.x.tolist(), self.P.tolist(), z, R)
+        self.x, self.P = np.array(x), np.array(P)
+        return K
 
     def _publish(self, P: np.ndarray) -> None:
         """The outputs, ``h_std`` from the covariance ``P``."""
@@ -316,10 +317,10 @@ class WhangGAEstimator(Estimator):
         shared = self._samples_per_calibration() * (R_h - white)
         self._error_update(gain, white + shared)
 
-    def _error_update(self, gain: np.ndarray, R_error: float) -> None:
+    def _error_update(self, gain: list[float], R_error: float) -> None:
         """The error covariance of ``h_std`` after the alpha-beta update of gain ``gain``,
         under the variance ``R_error`` that the height's error truly has (Joseph form)."""
-        self.P_error = joseph(self.P_error, gain, H_ALPHA_BETA, R_error)
+        self.P_error = np.array(joseph_first_of_two(self.P_error.tolist(), gain, R_error))
 
     def _interval(self, name: str, stamp: float) -> None:
         """Record the interval between the last two samples of ``name`` (positive only)."""
