@@ -338,10 +338,17 @@ def scenario_scale(cells: list[Cell]) -> tuple[float, float]:
     return max(0.5 * min(lows), 1e-4), 2.0 * max(highs)
 
 
-def cell_figure(cell: Cell, scenario: Scenario, scale: tuple[float, float]):
+Margins = dict[str, float]
+"""A figure's subplot margins (left, right, bottom, top) as fractions of its size."""
+
+
+def cell_figure(cell: Cell, scenario: Scenario, scale: tuple[float, float],
+                margins: Margins | None = None):
     """Every run's error as its trailing RMS (thin), the RMS over runs (bold) and 2x the
     mean h_std (dashed) versus time, on the scenario's log ``scale``; the start-up, fault
-    start and transient marked; every mark in the legend, under the plot."""
+    start and transient marked; every mark in the legend, under the plot. Laid out tight,
+    or with the ``margins`` of another cell of the scenario (the same axes, scale and
+    legend: the same layout, without the cost of finding it, which draws the figure)."""
     fig, ax = plt.subplots(figsize=PLOT_SIZE)
     runs = cell.errors.shape[0]
     trailing = trailing_errors(cell)
@@ -369,8 +376,16 @@ def cell_figure(cell: Cell, scenario: Scenario, scale: tuple[float, float]):
     ax.grid(True, which="both", alpha=0.25)
     ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.22), ncols=2,
               frameon=False)
-    fig.tight_layout()
+    if margins is None:
+        fig.tight_layout()
+    else:
+        fig.subplots_adjust(**margins)
     return fig
+
+
+def figure_margins(fig) -> Margins:
+    """The subplot margins of ``fig`` (:func:`cell_figure`'s ``margins``)."""
+    return {side: getattr(fig.subplotpars, side) for side in ("left", "right", "bottom", "top")}
 
 
 def _image(data: str, alt: str) -> str:
@@ -379,6 +394,7 @@ def _image(data: str, alt: str) -> str:
 
 def _scenario_section(scenario: Scenario, cells: list[Cell]) -> str:
     scale = scenario_scale(cells)
+    margins: Margins | None = None
     plots = []
     for cell in cells:
         anchor = esc(cell_id(cell.scenario, cell.estimator))
@@ -390,8 +406,9 @@ def _scenario_section(scenario: Scenario, cells: list[Cell]) -> str:
             caption = "; ".join(f"{k} {v}" for k, v in row.items() if k not in (
                 "scenario", "estimator", "runs"))
             alt = f"{cell.estimator} in {scenario.name}"
-            plots.append(f'<figure id="{anchor}">'
-                         f'{_image(_png(cell_figure(cell, scenario, scale)), alt)}'
+            fig = cell_figure(cell, scenario, scale, margins)
+            margins = margins or figure_margins(fig)
+            plots.append(f'<figure id="{anchor}">{_image(_png(fig), alt)}'
                          f"<figcaption>{esc(caption)}</figcaption></figure>")
     note = f" {esc(scenario.note)}" if scenario.note else ""
     return (f"<h3 id=\"{esc(scenario.name)}\">{esc(scenario.name)}</h3>"
