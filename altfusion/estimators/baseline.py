@@ -25,12 +25,21 @@ from dataclasses import dataclass
 import numpy as np
 
 from altfusion.estimators.base import Estimator, HealthParams, Verdict
-from altfusion.estimators.kalman import predict, shift_state, update
+from altfusion.estimators.kalman import (
+    predict,
+    quadratic_form,
+    shift_state,
+    sparse_dot,
+    sparse_row,
+    update,
+)
 from altfusion.estimators.streams import BARO, GPS, Stream
 from altfusion.params import param
 
 H_BARO = np.array([[1.0, 0.0, 1.0]])
 H_GPS = np.array([[1.0, 0.0, 0.0]])
+BARO_ROW, GPS_ROW = sparse_row(H_BARO), sparse_row(H_GPS)
+"""Their non-zero entries: the innovation and its variance without arrays."""
 
 
 @dataclass(frozen=True)
@@ -85,17 +94,17 @@ class BaselineKF(Estimator):
     def fuse(self, stream: Stream, sample: dict[str, float]) -> None:
         p = self.params
         if stream is BARO:
-            z, H, R = sample["baro_h"], H_BARO, p.R_baro
+            z, H, row, R = sample["baro_h"], H_BARO, BARO_ROW, p.R_baro
         else:
-            z, H, R = sample["gps_h"], H_GPS, p.R_gps
+            z, H, row, R = sample["gps_h"], H_GPS, GPS_ROW, p.R_gps
         if not self.started:
             self.x[0] = z - self.x[2] if stream is BARO else z
             self.started = True
             self.accept(self.aid[stream.prefix])
             self._publish()
             return
-        innovation = z - float((H @ self.x)[0])
-        variance = float((H @ self.P @ H.T)[0, 0]) + R
+        innovation = z - sparse_dot(self.x.tolist(), row)
+        variance = quadratic_form(self.P.tolist(), row) + R
         verdict = self.gate(self.aid[stream.prefix], innovation, variance, p.gate_sigma)
         if verdict is not Verdict.FUSED:
             self._publish()

@@ -373,6 +373,14 @@ def _times_row(P: Matrix, H: Sequence[tuple[int, float]]) -> list[float]:
     return [sum(h * P_a[i] for i, h in H) for P_a in P]
 
 
+def sparse_row(H: np.ndarray) -> tuple[tuple[int, float], ...]:
+    """The non-zero entries of the one-row matrix H as (state index, coefficient) pairs: the
+    sparse row of :func:`sparse_dot` and :func:`quadratic_form`. For a symmetric P they give
+    the floats of ``H @ x`` and ``H @ P @ H.T`` where each of their sums has at most two
+    terms (exact products: no fused multiply-add rounds otherwise), without the arrays."""
+    return tuple((int(i), float(h)) for i, h in enumerate(H[0]) if h)
+
+
 def sparse_dot(v: Vector, H: Sequence[tuple[int, float]]) -> float:
     """H v for a sparse row H ((state index, coefficient) pairs), summed from 0 in H's order
     (the float :func:`sum` gives; :func:`_times_row` sums the same way)."""

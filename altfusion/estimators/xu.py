@@ -70,13 +70,22 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from altfusion.estimators.base import Estimator, HealthParams, Verdict
-from altfusion.estimators.kalman import predict, shift_state, update
+from altfusion.estimators.kalman import (
+    predict,
+    quadratic_form,
+    shift_state,
+    sparse_dot,
+    sparse_row,
+    update,
+)
 from altfusion.estimators.streams import ACC, BARO, GPS, LASER, Stream
 from altfusion.params import param
 
 BARO_SOURCE, LASER_SOURCE = 0, 1
 H_ALTITUDE = np.array([[1.0, 0.0, 0.0, 0.0]])
 H_BARO = np.array([[1.0, 0.0, 0.0, 1.0]])
+ALTITUDE_ROW, BARO_ROW = sparse_row(H_ALTITUDE), sparse_row(H_BARO)
+"""Their non-zero entries: the innovation and its variance without arrays."""
 MOTION_STATES = np.array([True, True, True, False])
 """h, vz and the accelerometer bias: the states strong tracking always inflates."""
 MIN_VARIANCE = 1e-12
@@ -228,11 +237,12 @@ class XuSHAEKF(Estimator):
             self._last_laser_time = self.time
         self._select_source()
         if LASER in samples and self.height_source == LASER_SOURCE:
-            self._measure("laser", samples[LASER]["laser_h"] + p.terrain_h, H_ALTITUDE)
+            self._measure("laser", samples[LASER]["laser_h"] + p.terrain_h, H_ALTITUDE,
+                          ALTITUDE_ROW)
         if BARO in samples and self.height_source == BARO_SOURCE:
-            self._measure("baro", samples[BARO]["baro_h"], H_BARO)
+            self._measure("baro", samples[BARO]["baro_h"], H_BARO, BARO_ROW)
         if GPS in samples:
-            self._measure("gps", samples[GPS]["gps_h"], H_ALTITUDE)
+            self._measure("gps", samples[GPS]["gps_h"], H_ALTITUDE, ALTITUDE_ROW)
         self._publish()
 
     def _accelerometer(self, acc: float) -> None:
@@ -255,16 +265,18 @@ class XuSHAEKF(Estimator):
         elif laser_live and (not self.started or above < p.switch_h - p.switch_hysteresis):
             self.height_source = LASER_SOURCE
 
-    def _measure(self, name: str, z: float, H: np.ndarray) -> None:
-        """Steps 1-6 of the module documentation for one sample of sensor ``name``."""
+    def _measure(self, name: str, z: float, H: np.ndarray,
+                 row: tuple[tuple[int, float], ...]) -> None:
+        """Steps 1-6 of the module documentation for one sample of sensor ``name``; ``row``
+        is H's non-zero entries."""
         p = self.params
         channel = self.channels[name]
         if not self.started:
             self._start(z, H, channel.R_hat)
             self.accept(self.aid[name])
             return
-        innovation = z - float((H @ self.x)[0])                                 # (20)
-        hph = float((H @ self.P @ H.T)[0, 0])
+        innovation = z - sparse_dot(self.x.tolist(), row)                       # (20)
+        hph = quadratic_form(self.P.tolist(), row)
         ratio = channel.innovation_ratio(innovation**2 / (hph + channel.R_nominal))  # (15)-(17)
         if p.adaptive:       # (18), α = min(1, (c/α_C)²) without dividing by α_C = 0
             channel.weight = 1.0 if ratio <= p.weight_c else (p.weight_c / ratio) ** 2
