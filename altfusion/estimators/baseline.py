@@ -20,6 +20,7 @@ Deviations from the papers' "normal Kalman filter" (which none of them specifies
   (:meth:`reset_offset`).
 """
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -125,5 +126,5 @@ class BaselineKF(Estimator):
         return True
 
     def _publish(self) -> None:
-        self.h_est, self.vz_est, self.bias = (float(v) for v in self.x)
-        self.h_std = float(np.sqrt(self.P[0, 0]))
+        self.h_est, self.vz_est, self.bias = self.x.tolist()
+        self.h_std = math.sqrt(self.P.item(0, 0))

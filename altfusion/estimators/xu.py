@@ -225,7 +225,7 @@ class XuSHAEKF(Estimator):
         Q[2, 2] += p.acc_bias_psd * dt
         Q[3, 3] += p.baro_bias_psd * dt
         self.x, self.P = predict(self.x, self.P, self._Phi, Q, self._B, self.u)
-        self._publish()
+        # published by fuse_samples, which ends every step
 
     # -------------------------------------------------------------- measurements
     def fuse_samples(self, samples: dict[Stream, dict[str, float]]) -> None:
@@ -335,8 +335,8 @@ class XuSHAEKF(Estimator):
         return True
 
     def _publish(self) -> None:
-        self.h_est, self.vz_est, self.acc_bias, self.baro_bias = (float(v) for v in self.x)
-        self.h_std = math.sqrt(float(self.P[0, 0]))
+        self.h_est, self.vz_est, self.acc_bias, self.baro_bias = self.x.tolist()
+        self.h_std = math.sqrt(self.P.item(0, 0))
         self.weight_gps = self.channels["gps"].weight
         self.weight_baro = self.channels["baro"].weight
         self.weight_laser = self.channels["laser"].weight
