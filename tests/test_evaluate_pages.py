@@ -27,6 +27,7 @@ from altfusion.evaluation.report import (
     PLOT_DPI,
     cell_figure,
     cell_row,
+    figure_margins,
     scenario_scale,
     write_html,
 )
@@ -156,6 +157,19 @@ def test_every_plot_of_a_scenario_shares_one_log_y_scale():
     assert {ax.get_ylim() for ax in axes} == {scale}
     assert {ax.get_yscale() for ax in axes} == {"log"}
     assert scale == pytest.approx((0.2, 1000.0))
+
+
+def test_every_plot_of_a_scenario_has_the_tight_layout_of_its_first():
+    """The page lays a scenario's plots out once (the first cell's tight layout, reused):
+    right only if each cell's own tight layout is the same, as here for an estimator 1000x
+    worse than the first and a title twice as long."""
+    fault = Fault(100.0, ("baro",), 40.0)
+    cells = [cell("A", "s", [0.4, 0.4]), cell("AltitudeEKF_long_name", "s", [400.0, 500.0])]
+    scale = scenario_scale(cells)
+    margins = [figure_margins(cell_figure(c, scenario("s", fault), scale)) for c in cells]
+    assert margins[0] == margins[1]
+    reused = cell_figure(cells[1], scenario("s", fault), scale, margins[0])
+    assert figure_margins(reused) == margins[0]
 
 
 def test_the_page_images_are_pngs_at_the_plot_size(page):

@@ -196,7 +196,7 @@ class WhangGAEstimator(Estimator):
         lever = self.h_prior - p.H0
         sign = 1.0 if p.paper_lambda_sign else -1.0
         self.lambda_meas = sign * (temperature - p.lapse_rate * lever - p.T0) / p.T0   # (6)
-        variance = (p.R_temperature + p.lapse_rate**2 * self.P[0, 0]
+        variance = (p.R_temperature + p.lapse_rate**2 * self.P.item(0, 0)
                     + lever**2 * p.lapse_rate_var) / p.T0**2                        # (7)
         self.a, self.P_a, _ = update_one_state(self.a, self.P_a, self.lambda_meas,
                                                variance)                        # (20)-(22)
