@@ -26,14 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from altfusion.estimators.base import Estimator, HealthParams, Verdict
-from altfusion.estimators.kalman import (
-    predict,
-    quadratic_form,
-    shift_state,
-    sparse_dot,
-    sparse_row,
-    update,
-)
+from altfusion.estimators.kalman import measurement_prior, predict, shift_state, sparse_row, update
 from altfusion.estimators.streams import BARO, GPS, Stream
 from altfusion.params import param
 
@@ -104,8 +97,8 @@ class BaselineKF(Estimator):
             self.accept(self.aid[stream.prefix])
             self._publish()
             return
-        innovation = z - sparse_dot(self.x.tolist(), row)
-        variance = quadratic_form(self.P.tolist(), row) + R
+        predicted, hph = measurement_prior(self.x, self.P, row)
+        innovation, variance = z - predicted, hph + R
         verdict = self.gate(self.aid[stream.prefix], innovation, variance, p.gate_sigma)
         if verdict is not Verdict.FUSED:
             self._publish()

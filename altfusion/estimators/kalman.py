@@ -381,6 +381,13 @@ def sparse_row(H: np.ndarray) -> tuple[tuple[int, float], ...]:
     return tuple((int(i), float(h)) for i, h in enumerate(H[0]) if h)
 
 
+def measurement_prior(x: np.ndarray, P: np.ndarray, row: Sequence[tuple[int, float]],
+                          ) -> tuple[float, float]:
+    """H x and H P Hᵀ of a filter held in arrays, for H's sparse ``row`` (:func:`sparse_row`):
+    the floats of ``H @ x`` and ``H @ P @ H.T`` (P symmetric), without them."""
+    return sparse_dot(x.tolist(), row), quadratic_form(P.tolist(), row)
+
+
 def sparse_dot(v: Vector, H: Sequence[tuple[int, float]]) -> float:
     """H v for a sparse row H ((state index, coefficient) pairs), summed from 0 in H's order
     (the float :func:`sum` gives; :func:`_times_row` sums the same way)."""

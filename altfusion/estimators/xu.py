@@ -70,14 +70,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from altfusion.estimators.base import Estimator, HealthParams, Verdict
-from altfusion.estimators.kalman import (
-    predict,
-    quadratic_form,
-    shift_state,
-    sparse_dot,
-    sparse_row,
-    update,
-)
+from altfusion.estimators.kalman import measurement_prior, predict, shift_state, sparse_row, update
 from altfusion.estimators.streams import ACC, BARO, GPS, LASER, Stream
 from altfusion.params import param
 
@@ -275,8 +268,8 @@ class XuSHAEKF(Estimator):
             self._start(z, H, channel.R_hat)
             self.accept(self.aid[name])
             return
-        innovation = z - sparse_dot(self.x.tolist(), row)                       # (20)
-        hph = quadratic_form(self.P.tolist(), row)
+        predicted, hph = measurement_prior(self.x, self.P, row)
+        innovation = z - predicted                                              # (20)
         ratio = channel.innovation_ratio(innovation**2 / (hph + channel.R_nominal))  # (15)-(17)
         if p.adaptive:       # (18), α = min(1, (c/α_C)²) without dividing by α_C = 0
             channel.weight = 1.0 if ratio <= p.weight_c else (p.weight_c / ratio) ** 2
