@@ -7,6 +7,7 @@ from hypothesis import strategies as st
 
 from altfusion.estimators.kalman import (
     constant_states_noise,
+    dense_row,
     inflate_along,
     joseph,
     joseph_first_of_two,
@@ -88,6 +89,15 @@ def test_first_of_two_states_update_on_floats_is_the_array_update_bit_for_bit():
         R_other = float(10 ** rng.uniform(-4, 3))
         assert joseph_first_of_two(P.tolist(), gain, R_other) == joseph(
             P, result.K, H, R_other).tolist()
+
+
+def test_a_sparse_row_as_the_array_of_update():
+    """The (1, n) array of the (index, coefficient) pairs, shared and read only."""
+    H = dense_row(((0, 1.0), (3, 1.0)), 4)
+    assert H.tolist() == [[1.0, 0.0, 0.0, 1.0]]
+    assert dense_row(((0, 1.0), (3, 1.0)), 4) is H
+    with pytest.raises(ValueError):
+        H[0, 1] = 2.0
 
 
 def _random_covariance(rng, n: int) -> np.ndarray:

@@ -26,14 +26,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from altfusion.estimators.base import Estimator, HealthParams, Verdict
-from altfusion.estimators.kalman import measurement_prior, predict, shift_state, sparse_row, update
+from altfusion.estimators.kalman import dense_row, measurement_prior, predict, shift_state, update
 from altfusion.estimators.streams import BARO, GPS, Stream
 from altfusion.params import param
 
-H_BARO = np.array([[1.0, 0.0, 1.0]])
-H_GPS = np.array([[1.0, 0.0, 0.0]])
-BARO_ROW, GPS_ROW = sparse_row(H_BARO), sparse_row(H_GPS)
-"""Their non-zero entries: the innovation and its variance without arrays."""
+N = 3
+"""States: h, vz, b."""
+BARO_ROW = ((0, 1.0), (2, 1.0))
+"""H of the barometer, h + b, as (state index, coefficient) pairs."""
+GPS_ROW = ((0, 1.0),)
+"""H of the GPS height."""
 
 
 @dataclass(frozen=True)
@@ -73,7 +75,7 @@ class BaselineKF(Estimator):
 
     def initialize_filter(self) -> None:
         p = self.params
-        self.x = np.zeros(3)
+        self.x = np.zeros(N)
         self.P = np.diag([p.P0_h, p.P0_vz, p.P0_b])
         self.bias = 0.0
         self.innovation = 0.0
@@ -88,22 +90,22 @@ class BaselineKF(Estimator):
     def fuse(self, stream: Stream, sample: dict[str, float]) -> None:
         p = self.params
         if stream is BARO:
-            z, H, row, R = sample["baro_h"], H_BARO, BARO_ROW, p.R_baro
+            z, H, R = sample["baro_h"], BARO_ROW, p.R_baro
         else:
-            z, H, row, R = sample["gps_h"], H_GPS, GPS_ROW, p.R_gps
+            z, H, R = sample["gps_h"], GPS_ROW, p.R_gps
         if not self.started:
             self.x[0] = z - self.x[2] if stream is BARO else z
             self.started = True
             self.accept(self.aid[stream.prefix])
             self._publish()
             return
-        predicted, hph = measurement_prior(self.x, self.P, row)
+        predicted, hph = measurement_prior(self.x, self.P, H)
         innovation, variance = z - predicted, hph + R
         verdict = self.gate(self.aid[stream.prefix], innovation, variance, p.gate_sigma)
         if verdict is not Verdict.FUSED:
             self._publish()
             return
-        result = update(self.x, self.P, z, H, R)
+        result = update(self.x, self.P, z, dense_row(H, N), R)
         self.x, self.P = result.x, result.P
         self.innovation = float(result.innovation[0])
         self._publish()

@@ -120,7 +120,8 @@ Matrix = Sequence[Sequence[float]]
 # other terms times 0): a filter of one state, and a measurement of the first of two
 # states (H = [1, 0]). There a fused multiply-add rounds once where float arithmetic rounds
 # once too, and the order cannot matter: the floats are the same on any BLAS
-# (tests/test_kalman.py), without the arrays' cost.
+# (tests/test_kalman.py), without the arrays' cost. (update_state_component, below, is the
+# same update in another order of operations: equal to rounding, not bit for bit.)
 
 
 def update_one_state(x: float, P: float, z: float, R: float, gain_scale: float = 1.0,
@@ -373,19 +374,24 @@ def _times_row(P: Matrix, H: Sequence[tuple[int, float]]) -> list[float]:
     return [sum(h * P_a[i] for i, h in H) for P_a in P]
 
 
-def sparse_row(H: np.ndarray) -> tuple[tuple[int, float], ...]:
-    """The non-zero entries of the one-row matrix H as (state index, coefficient) pairs: the
-    sparse row of :func:`sparse_dot` and :func:`quadratic_form`. For a symmetric P they give
-    the floats of ``H @ x`` and ``H @ P @ H.T`` where each of their sums has at most two
-    terms (exact products: no fused multiply-add rounds otherwise), without the arrays."""
-    return tuple((int(i), float(h)) for i, h in enumerate(H[0]) if h)
+@cache
+def dense_row(H: Sequence[tuple[int, float]], n: int) -> np.ndarray:
+    """The sparse row H ((state index, coefficient) pairs, a tuple) as the (1, n) array of
+    :func:`update`, made once (read only: every use makes a new array from it)."""
+    row = np.zeros((1, n))
+    for i, h in H:
+        row[0, i] = h
+    row.flags.writeable = False
+    return row
 
 
-def measurement_prior(x: np.ndarray, P: np.ndarray, row: Sequence[tuple[int, float]],
-                          ) -> tuple[float, float]:
-    """H x and H P Hᵀ of a filter held in arrays, for H's sparse ``row`` (:func:`sparse_row`):
-    the floats of ``H @ x`` and ``H @ P @ H.T`` (P symmetric), without them."""
-    return sparse_dot(x.tolist(), row), quadratic_form(P.tolist(), row)
+def measurement_prior(x: np.ndarray, P: np.ndarray, H: Sequence[tuple[int, float]],
+                      ) -> tuple[float, float]:
+    """H x and H P Hᵀ for a sparse row H of a filter held in arrays: the floats of
+    ``H @ x`` and ``H @ P @ H.T`` (P symmetric) where each of their sums has at most two
+    terms, all exact products (no fused multiply-add rounds otherwise), without the
+    arrays."""
+    return sparse_dot(x.tolist(), H), quadratic_form(P.tolist(), H)
 
 
 def sparse_dot(v: Vector, H: Sequence[tuple[int, float]]) -> float:

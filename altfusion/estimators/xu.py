@@ -70,15 +70,17 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from altfusion.estimators.base import Estimator, HealthParams, Verdict
-from altfusion.estimators.kalman import measurement_prior, predict, shift_state, sparse_row, update
+from altfusion.estimators.kalman import dense_row, measurement_prior, predict, shift_state, update
 from altfusion.estimators.streams import ACC, BARO, GPS, LASER, Stream
 from altfusion.params import param
 
 BARO_SOURCE, LASER_SOURCE = 0, 1
-H_ALTITUDE = np.array([[1.0, 0.0, 0.0, 0.0]])
-H_BARO = np.array([[1.0, 0.0, 0.0, 1.0]])
-ALTITUDE_ROW, BARO_ROW = sparse_row(H_ALTITUDE), sparse_row(H_BARO)
-"""Their non-zero entries: the innovation and its variance without arrays."""
+N = 4
+"""States: h, vz, b_a, ε_b."""
+ALTITUDE_ROW = ((0, 1.0),)
+"""H of a height measurement (laser, GPS), as (state index, coefficient) pairs."""
+BARO_ROW = ((0, 1.0), (3, 1.0))
+"""H of the barometer: h + ε_b (eq. 14)."""
 MOTION_STATES = np.array([True, True, True, False])
 """h, vz and the accelerometer bias: the states strong tracking always inflates."""
 MIN_VARIANCE = 1e-12
@@ -191,7 +193,7 @@ class XuSHAEKF(Estimator):
 
     def initialize_filter(self) -> None:
         p = self.params
-        self.x = np.zeros(4)
+        self.x = np.zeros(N)
         self.P = np.diag([p.R_baro, p.P0_vz, p.acc_bias_std**2, p.baro_bias_std**2])
         self.u = 0.0
         self._acc_last: float | None = None
@@ -230,12 +232,11 @@ class XuSHAEKF(Estimator):
             self._last_laser_time = self.time
         self._select_source()
         if LASER in samples and self.height_source == LASER_SOURCE:
-            self._measure("laser", samples[LASER]["laser_h"] + p.terrain_h, H_ALTITUDE,
-                          ALTITUDE_ROW)
+            self._measure("laser", samples[LASER]["laser_h"] + p.terrain_h, ALTITUDE_ROW)
         if BARO in samples and self.height_source == BARO_SOURCE:
-            self._measure("baro", samples[BARO]["baro_h"], H_BARO, BARO_ROW)
+            self._measure("baro", samples[BARO]["baro_h"], BARO_ROW)
         if GPS in samples:
-            self._measure("gps", samples[GPS]["gps_h"], H_ALTITUDE, ALTITUDE_ROW)
+            self._measure("gps", samples[GPS]["gps_h"], ALTITUDE_ROW)
         self._publish()
 
     def _accelerometer(self, acc: float) -> None:
@@ -258,17 +259,16 @@ class XuSHAEKF(Estimator):
         elif laser_live and (not self.started or above < p.switch_h - p.switch_hysteresis):
             self.height_source = LASER_SOURCE
 
-    def _measure(self, name: str, z: float, H: np.ndarray,
-                 row: tuple[tuple[int, float], ...]) -> None:
-        """Steps 1-6 of the module documentation for one sample of sensor ``name``; ``row``
-        is H's non-zero entries."""
+    def _measure(self, name: str, z: float, H: tuple[tuple[int, float], ...]) -> None:
+        """Steps 1-6 of the module documentation for one sample of sensor ``name``, whose
+        measurement row is H."""
         p = self.params
         channel = self.channels[name]
         if not self.started:
             self._start(z, H, channel.R_hat)
             self.accept(self.aid[name])
             return
-        predicted, hph = measurement_prior(self.x, self.P, row)
+        predicted, hph = measurement_prior(self.x, self.P, H)
         innovation = z - predicted                                              # (20)
         ratio = channel.innovation_ratio(innovation**2 / (hph + channel.R_nominal))  # (15)-(17)
         if p.adaptive:       # (18), α = min(1, (c/α_C)²) without dividing by α_C = 0
@@ -290,7 +290,7 @@ class XuSHAEKF(Estimator):
             channel.estimate_noise(innovation, hph)                             # (22), (28)
             if active and innovation**2 > p.gamma * (hph + channel.R_nominal):   # (23)
                 self._strong_tracking(innovation**2, channel.R_nominal, hph)     # (24)
-        result = update(self.x, self.P, z, H, channel.R_hat,
+        result = update(self.x, self.P, z, dense_row(H, N), channel.R_hat,
                         gain_scale=channel.weight)                              # (25)-(27)
         self.x, self.P = result.x, result.P
 
@@ -309,12 +309,13 @@ class XuSHAEKF(Estimator):
         self.strong_tracking_factor = factor
         self.n_strong_tracking += 1
 
-    def _start(self, z: float, H: np.ndarray, R: float) -> None:
+    def _start(self, z: float, H: tuple[tuple[int, float], ...], R: float) -> None:
         """Start at the first height sample: h = z - (rest of H)·x, uncorrelated with vz."""
-        self.x[0] = z - float(H[0, 3] * self.x[3])
+        offset = dict(H).get(3, 0.0)                    # ε_b's coefficient
+        self.x[0] = z - float(offset * self.x[3])
         self.P[0, :] = self.P[:, 0] = 0.0
-        self.P[0, 0] = R + H[0, 3] ** 2 * self.P[3, 3]
-        self.P[0, 3] = self.P[3, 0] = -H[0, 3] * self.P[3, 3]
+        self.P[0, 0] = R + offset**2 * self.P[3, 3]
+        self.P[0, 3] = self.P[3, 0] = -offset * self.P[3, 3]
         self.started = True
 
     def reset_height(self, source: str, innovation: float, variance: float) -> None:
