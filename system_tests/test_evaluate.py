@@ -14,6 +14,7 @@ import pytest
 from altfusion.cosim.ssp import read_ssp
 from altfusion.health_events import events_csv, health_events
 from altfusion.montecarlo.storage import finished_runs, load_run
+from altfusion.systems.error_models import FLAT_TERRAIN
 
 ROOT = Path(__file__).resolve().parents[1]
 MODELS = ROOT / "models"
@@ -196,10 +197,16 @@ def test_each_told_mode_puts_what_it_tells_in_the_scenarios_specs(fmus):
         assert told(mode, "hajiyev", "HajiyevAdaptiveEstimator") == pytest.approx(expected)
         assert told(mode, "hajiyev", "estimator") == paper
         assert "estimator.h_est" not in scenario.spec.record
-    # The fault flight states no error models: models tells what noise tells.
+    # The fault flight: noise tells its sensors' noises only, models also the flight's error
+    # models (what the fault suite tells); BaoDriftEstimator is told noises only there.
+    noise = told("noise", "nominal_flight", "AltitudeEKF")
+    assert set(noise) == {"baro_noise", "gps_noise", "gps_vz_noise", "acc_noise",
+                          "radar_noise", "laser_noise", "gps_vdop_ref"}
+    assert told("models", "nominal_flight", "AltitudeEKF") == {**noise, **FLAT_TERRAIN,
+                                                               "height_ref": "range"}
+    assert told("models", "nominal_flight", "BaoDriftEstimator") == \
+        told("noise", "nominal_flight", "BaoDriftEstimator")
     for component in ("AltitudeEKF", "BaoDriftEstimator"):
-        assert told("models", "nominal_flight", component) == \
-            told("noise", "nominal_flight", component)
         assert told("nothing", "nominal_flight", component) == {}
     bao = told("noise", "nominal_flight", "BaoDriftEstimator")
     assert told("misstated_x0.2", "nominal_flight", "BaoDriftEstimator") == pytest.approx(

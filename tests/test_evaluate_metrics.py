@@ -36,8 +36,9 @@ from altfusion.evaluation.scenarios import (
     noise_parameters,
     not_applicable,
 )
-from altfusion.evaluation.told import misstate
-from altfusion.systems.error_models import SENSOR_ERRORS
+from altfusion.evaluation.told import misstate, split_noise
+from altfusion.systems.error_models import FLAT_TERRAIN, SENSOR_ERRORS
+from altfusion.systems.faults import BARO_BIAS_PSD, BARO_VARIANCE, GPS_VARIANCE, TRUE_NOISE
 
 DT = 0.1
 TIME = np.round(np.arange(0.0, 300.0 + DT / 2, DT), 10)
@@ -187,6 +188,20 @@ def test_the_vdop_a_gps_noise_holds_at_goes_with_it():
     assert told == {"baro_noise": 0.5, "gps_noise": 3.0, "gps_vdop_ref": 1.5}
     assert noise_parameters(estimator(BaselineKF), noise) == {"R_baro": 0.25, "R_gps": 9.0}
     assert misstate(told, 5.0) == {"baro_noise": 2.5, "gps_noise": 15.0, "gps_vdop_ref": 1.5}
+
+
+def test_the_fault_suites_settings_split_into_noises_and_error_models():
+    """Told only the noise, an estimator in the fault flight gets the suite's noises, not its
+    terrain, height reference or walks (error models, as in a paper scenario)."""
+    noise, models = split_noise(TRUE_NOISE["AltitudeEKF"])
+    assert set(noise) == {"baro_noise", "gps_noise", "gps_vz_noise", "acc_noise",
+                          "radar_noise", "laser_noise"}
+    assert models == {**FLAT_TERRAIN, "height_ref": "range"}
+    assert split_noise(TRUE_NOISE["HajiyevAdaptiveEstimator"]) == (
+        {"R_baro": BARO_VARIANCE, "R_gps": GPS_VARIANCE}, {"drift_psd": BARO_BIAS_PSD})
+    assert split_noise(TRUE_NOISE["YangFusionKF"])[0] == {}
+    assert split_noise({"gps_noise": 3.0, "gps_vdop_ref": 1.5}) == (
+        {"gps_noise": 3.0, "gps_vdop_ref": 1.5}, {})
 
 
 def test_every_paper_scenario_states_error_models_an_estimator_can_take():

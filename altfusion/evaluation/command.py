@@ -30,9 +30,10 @@ is the evaluation's `--told` mode, each mode one evaluation of every scenario:
 * `misstated`: what `noise` tells with every noise misstated x0.2 and, separately, x5 (a
   noise told as a variance x0.04 and x25).
 
-Everything else runs on each estimator's defaults. The fault flight states no error models:
-there `models` tells what `noise` tells (the flight's sensor settings, its flat terrain and
-AltitudeEKF's range height reference among them; `misstated` misstates their noises). The
+Everything else runs on each estimator's defaults. In the fault flight `models` tells what
+the fault suite tells: the sensors' noises and the flight's error models (its flat terrain at
+0 m, AltitudeEKF's range height reference, the baro walk and YangFusionKF's GNSS-offset walk);
+`noise` and `misstated` tell the noises only, as in the paper scenarios. The
 paper's own estimator keeps its paper's parameters (and, in yang2020 and xu2016, flies the
 aircraft): in `models` and `noise` its cell is that paper-configured estimator, the
 reference an estimator told only the noise has to beat. In `nothing` and `misstated` every

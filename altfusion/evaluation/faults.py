@@ -6,7 +6,8 @@ The flight is closed on the true altitude, so every estimator is an observer: ea
 component named after its FMU, connected by contract names to the five sensors, told what
 the ``--told`` mode tells (:mod:`~altfusion.evaluation.told`) of the flight's true sensor
 noise (the flight's own choices for the estimators it knows, then
-:func:`~.scenarios.noise_parameters`); the flight states no error models. An estimator
+:func:`~.scenarios.noise_parameters`) and of its error models (the rest of the fault suite's
+settings: the flat terrain, AltitudeEKF's range height reference, the baro walk). An estimator
 reading none of the sensors a fault needs (``FaultScenario.needs``) is n/a for that fault:
 the fault tells nothing about it.
 
@@ -38,7 +39,7 @@ from altfusion.evaluation.scenarios import (
     sensor_noise,
     sensor_sources,
 )
-from altfusion.evaluation.told import DEFAULT_TOLD, Told
+from altfusion.evaluation.told import DEFAULT_TOLD, Told, split_noise
 from altfusion.systems.faults import (
     FAULTS,
     TRUE_NOISE,
@@ -73,10 +74,10 @@ def _flight(estimators: dict[str, EstimatorInfo], fmu_paths: dict[str, Path],
             missing[estimator.name] = reason
             continue
         components[estimator.name] = estimator.name
-        parameters = {**TRUE_NOISE.get(estimator.name, {}),
-                      **noise_parameters(estimator, noise)}
+        stated, models = split_noise(TRUE_NOISE.get(estimator.name, {}))
         added.append(ComponentSpec(estimator.name, estimator.name, spec.base_step,
-                                   told.tell(parameters, {})))
+                                   told.tell({**stated, **noise_parameters(estimator, noise)},
+                                             models)))
         connections.extend(sensor_inputs(estimator, estimator.name, sources))
     record, metrics = record_estimators(components, TRUTH)
     spec = replace(spec, name="evaluate_fault_flight",

@@ -13,10 +13,10 @@ be wrong. Each mode is one evaluation of every scenario, in its own campaigns:
 * ``misstated``: what ``noise`` tells with every noise misstated, once x0.2 and once x5
   (:data:`MISSTATED_FACTORS`: two variants; a noise told as a variance x0.04 and x25).
 
-In the fault flight the estimators are told its sensors' settings
-(:data:`altfusion.systems.faults.TRUE_NOISE`: the noises, the flat terrain and AltitudeEKF's
-range height reference, the flight's baro walk) and no stated error models: there ``models``
-tells what ``noise`` tells.
+In the fault flight the fault suite's settings (:data:`altfusion.systems.faults.TRUE_NOISE`)
+are split the same way (:func:`split_noise`): ``noise`` tells their noises, ``models`` also
+the rest (the flat terrain, AltitudeEKF's range height reference, the flight's baro and GNSS
+walks), which is what the fault suite tells.
 
 The paper's own estimator (the system's component ``estimator``) keeps its paper's
 parameters, and in ``models`` and ``noise`` its cell is that component: the reference an
@@ -72,6 +72,15 @@ def noise_power(name: str) -> int:
     if name in NOISE_NAMES or name.endswith("_noise_std") or name in SIGMA_PARAMETERS:
         return 1
     return 0
+
+
+def split_noise(parameters: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
+    """``parameters`` split into those stating a sensor noise (:func:`noise_power`, with the
+    conditions a noise holds at, :data:`NOISE_REFERENCES`) and the others: the error models
+    (a terrain, a reference, a bias's walk)."""
+    noise = {name: value for name, value in parameters.items()
+             if noise_power(name) or name in NOISE_REFERENCES}
+    return noise, {name: value for name, value in parameters.items() if name not in noise}
 
 
 def misstate(parameters: dict[str, Any], factor: float) -> dict[str, Any]:
