@@ -222,7 +222,9 @@ TRUE_NOISE: dict[str, dict[str, Any]] = {
                     "radar_noise": SEED_003_SENSORS["radar"]["noise_std"],
                     "laser_noise": 0.005, **FLAT_TERRAIN, "height_ref": "range"},
 }
-"""Each estimator's noise parameters set to the flight's sensors (yang2020 Section 4.2:
+"""The fault suite's settings of each estimator: its noise parameters set to the flight's
+sensors and the flight's error models (``altfusion evaluate --told noise`` tells only the
+former, :func:`altfusion.evaluation.told.split_noise`). The noises are yang2020's (Section 4.2:
 baro 20 m, GPS 30 m, accelerometer 0.01 m/s²; YangFusionKF's defaults are these already;
 the laser keeps its 5 mm, XuSHAEKF's default; AltitudeEKF takes all of them by their
 contract names). BaoDriftEstimator's worst accepted GNSS
