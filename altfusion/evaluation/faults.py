@@ -7,9 +7,9 @@ component named after its FMU, connected by contract names to the five sensors, 
 the ``--told`` mode tells (:mod:`~altfusion.evaluation.told`) of the flight's true sensor
 noise (the flight's own choices for the estimators it knows, then
 :func:`~.scenarios.noise_parameters`) and of its error models (the rest of the fault suite's
-settings: the flat terrain, AltitudeEKF's range height reference, the baro walk). An estimator
-reading none of the sensors a fault needs (``FaultScenario.needs``) is n/a for that fault:
-the fault tells nothing about it.
+settings: the flat terrain, AltitudeEKF's range height reference, the baro and GNSS-offset
+walks). An estimator reading none of the sensors a fault needs (``FaultScenario.needs``) is
+n/a for that fault: the fault tells nothing about it.
 
 Rate: the flight's own (:func:`~altfusion.systems.faults.fault_flight`: plant, fast
 sensors, fault component and estimators at 20 Hz, GNSS 10 Hz, radio altimeter 5 Hz); every
