@@ -10,11 +10,16 @@ seeded sensor samples. Printed per scenario: the height RMS error of the paper's
 and of AltitudeEKF over all runs, and AltitudeEKF's coverage, the share of samples with
 |e| <= 2 h_std after the first ``SETTLE`` seconds (target 85-99.5 %).
 
-Run by hand (models/ built): ``python benchmarks/altitude_ekf_scenarios.py [RUNS]``;
+With ``--priors`` AltitudeEKF is told the noises only, then the noises and one group of the
+stated error models at a time (:data:`PRIOR_GROUPS`), then all of them: which stated model
+carries the paper estimator's advantage over AltitudeEKF told only the noises.
+
+Run by hand (models/ built):
+``python benchmarks/altitude_ekf_scenarios.py [--runs N] [--priors] [SCENARIO ...]``;
 the core backend steps the components in-process (same numbers as the FMUs, faster).
 """
 
-import sys
+import argparse
 from dataclasses import replace
 from pathlib import Path
 
@@ -39,11 +44,22 @@ TRUTH = {"hajiyev": "truth.gps_h", "hajiyev_drift": "truth.gps_h"}
 SEEDED = ("air_data", "gnss", "accelerometer", "radar", "laser", "atmosphere")
 
 
+PRIOR_GROUPS = {"baro offset": ("P0_offset",), "baro scale": ("P0_scale", "baro_scale_psd"),
+                "baro walk": ("baro_bias_psd",),
+                "terrain": ("terrain_h", "P0_terrain", "terrain_psd"),
+                "accelerometer bias": ("P0_acc_bias", "acc_bias_psd")}
+"""The stated error models in groups, each told on its own with ``--priors``."""
+
+
+def noises(name: str) -> dict:
+    """AltitudeEKF's noise parameters in system ``name``: its sensors' true noises."""
+    system = build_system(name)
+    return sensor_noise(system, {c.fmu: MODELS / f"{c.fmu}.fmu" for c in system.components})
+
+
 def parameters(name: str) -> dict:
     """AltitudeEKF's parameters in system ``name``: its sensors' noises and error models."""
-    system = build_system(name)
-    fmus = {c.fmu: MODELS / f"{c.fmu}.fmu" for c in system.components}
-    return {**sensor_noise(system, fmus), **SENSOR_ERRORS[name]}
+    return {**noises(name), **SENSOR_ERRORS[name]}
 
 
 def with_observer(name: str, parameters: dict):
@@ -59,9 +75,11 @@ def with_observer(name: str, parameters: dict):
                                                     "ekf.h_std"))))
 
 
-def run(name: str, runs: int) -> tuple[float, float, float]:
+def run(name: str, runs: int, told: dict) -> tuple[float, float, float]:
+    """The paper estimator's and AltitudeEKF's RMS error and AltitudeEKF's coverage over
+    ``runs`` seeded runs of system ``name``, AltitudeEKF told the parameters ``told``."""
     truth = TRUTH.get(name, "plant.h")
-    system = with_observer(name, parameters(name))
+    system = with_observer(name, told)
     fmus = {c.fmu: MODELS / f"{c.fmu}.fmu" for c in system.components}
     present = {c.name for c in system.components}
     paper, ekf, covered = [], [], []
@@ -80,13 +98,34 @@ def run(name: str, runs: int) -> tuple[float, float, float]:
     return rms[0], rms[1], float(np.mean(np.concatenate(covered)))
 
 
+def told_variants(name: str, priors: bool) -> dict[str, dict]:
+    """What AltitudeEKF is told in system ``name``: the noises and every stated error model,
+    or (``priors``) the noises alone, with each group of error models, with all."""
+    stated = SENSOR_ERRORS[name]
+    if not priors:
+        return {"models": parameters(name)}
+    noise = noises(name)
+    groups = {group: {key: stated[key] for key in keys if key in stated}
+              for group, keys in PRIOR_GROUPS.items()}
+    return {"noise": noise,
+            **{f"noise + {group}": {**noise, **told} for group, told in groups.items() if told},
+            "models": parameters(name)}
+
+
 def main() -> None:
-    runs = int(sys.argv[1]) if len(sys.argv) > 1 else 3
-    names = sys.argv[2:] or list(SENSOR_ERRORS)
-    print(f"{'scenario':26s} {'paper RMS m':>12s} {'AltitudeEKF RMS m':>18s} {'coverage':>9s}")
-    for name in names:
-        paper, ekf, coverage = run(name, runs)
-        print(f"{name:26s} {paper:12.4g} {ekf:18.4g} {100 * coverage:8.1f}%", flush=True)
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("scenarios", nargs="*", default=list(SENSOR_ERRORS))
+    parser.add_argument("--runs", type=int, default=3)
+    parser.add_argument("--priors", action="store_true",
+                        help="told the noises, then each group of stated error models")
+    args = parser.parse_args()
+    print(f"{'scenario':16s} {'told':30s} {'paper RMS m':>12s} {'AltitudeEKF RMS m':>18s} "
+          f"{'coverage':>9s}")
+    for name in args.scenarios:
+        for label, told in told_variants(name, args.priors).items():
+            paper, ekf, coverage = run(name, args.runs, told)
+            print(f"{name:16s} {label:30s} {paper:12.4g} {ekf:18.4g} {100 * coverage:8.1f}%",
+                  flush=True)
 
 
 if __name__ == "__main__":
