@@ -11,6 +11,7 @@ from altfusion.estimators.kalman import (
     inflate_along,
     joseph,
     joseph_first_of_two,
+    measurement_prior,
     move_datum,
     predict,
     predict_constant_acceleration,
@@ -65,8 +66,8 @@ def test_vector_update_keeps_p_symmetric_positive_definite():
 def test_one_state_update_on_floats_is_the_array_update_bit_for_bit(P, R, x, z, gain_scale):
     """Not to rounding: the same floats (the estimators' outputs are checksummed)."""
     result = update(np.array([x]), np.array([[P]]), z, np.array([[1.0]]), R, gain_scale)
-    assert update_one_state(x, P, z, R, gain_scale) == (
-        result.x[0], result.P[0, 0], result.K[0, 0])
+    assert _bits(update_one_state(x, P, z, R, gain_scale)) == _bits(
+        (result.x[0], result.P[0, 0], result.K[0, 0]))
 
 
 def test_first_of_two_states_update_on_floats_is_the_array_update_bit_for_bit():
@@ -83,12 +84,28 @@ def test_first_of_two_states_update_on_floats_is_the_array_update_bit_for_bit():
         z, R = float(rng.normal(0.0, 100.0)), float(10 ** rng.uniform(-4, 3))
         result = update(x, P, z, H, R)
         x_new, P_new, gain = update_first_of_two(x.tolist(), P.tolist(), z, R)
-        assert x_new == result.x.tolist()
-        assert P_new == result.P.tolist()
-        assert gain == result.K[:, 0].tolist()
+        assert _bits(x_new) == _bits(result.x)
+        assert _bits(P_new) == _bits(result.P)
+        assert _bits(gain) == _bits(result.K[:, 0])
         R_other = float(10 ** rng.uniform(-4, 3))
-        assert joseph_first_of_two(P.tolist(), gain, R_other) == joseph(
-            P, result.K, H, R_other).tolist()
+        assert _bits(joseph_first_of_two(P.tolist(), gain, R_other)) == _bits(
+            joseph(P, result.K, H, R_other))
+
+
+@pytest.mark.parametrize("H", [((0, 1.0),), ((0, 1.0), (2, 1.0)), ((0, 1.0), (3, 1.0))])
+def test_measurement_prior_is_the_array_products_bit_for_bit(H):
+    """H x and H P Hᵀ of a sparse row (XuSHAEKF's and BaselineKF's rows: at most two terms
+    per sum, all exact products) are the floats of ``H @ x`` and ``H @ P @ H.T``, on
+    symmetric covariances of every scale, with a diagonal start's exact zeros. 500 draws."""
+    rng = np.random.default_rng(3)
+    H_array = dense_row(H, 4)
+    for draw in range(500):
+        P = _random_covariance(rng, 4) if draw % 4 else np.diag(rng.uniform(0.1, 100.0, 4))
+        P = 0.5 * (P + P.T)
+        x = rng.normal(0.0, 100.0, 4)
+        predicted, hph = measurement_prior(x, P, H)
+        assert _bits((predicted, hph)) == _bits(
+            ((H_array @ x)[0], (H_array @ P @ H_array.T)[0, 0]))
 
 
 def test_a_sparse_row_as_the_array_of_update():
@@ -98,6 +115,12 @@ def test_a_sparse_row_as_the_array_of_update():
     assert dense_row(((0, 1.0), (3, 1.0)), 4) is H
     with pytest.raises(ValueError):
         H[0, 1] = 2.0
+
+
+def _bits(values) -> bytes:
+    """The IEEE 754 bytes of ``values`` (floats, nested sequences or arrays): equal only if
+    every float is the same, signed zeros included."""
+    return np.asarray(values, dtype=float).tobytes()
 
 
 def _random_covariance(rng, n: int) -> np.ndarray:

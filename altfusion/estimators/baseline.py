@@ -32,7 +32,9 @@ from altfusion.params import param
 
 N = 3
 """States: h, vz, b."""
-BARO_ROW = ((0, 1.0), (2, 1.0))
+BIAS = 2
+"""The index of the barometer bias b."""
+BARO_ROW = ((0, 1.0), (BIAS, 1.0))
 """H of the barometer, h + b, as (state index, coefficient) pairs."""
 GPS_ROW = ((0, 1.0),)
 """H of the GPS height."""
@@ -94,7 +96,7 @@ class BaselineKF(Estimator):
         else:
             z, H, R = sample["gps_h"], GPS_ROW, p.R_gps
         if not self.started:
-            self.x[0] = z - self.x[2] if stream is BARO else z
+            self.x[0] = z - self.x[BIAS] if stream is BARO else z
             self.started = True
             self.accept(self.aid[stream.prefix])
             self._publish()
@@ -117,7 +119,7 @@ class BaselineKF(Estimator):
         """The baro bias b (an isolated baro re-admitted, estimators/base.py)."""
         if source != "baro":
             return False
-        shift_state(self.x, self.P, 2, innovation, variance)
+        shift_state(self.x, self.P, BIAS, innovation, variance)
         return True
 
     def _publish(self) -> None:

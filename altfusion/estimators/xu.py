@@ -77,9 +77,11 @@ from altfusion.params import param
 BARO_SOURCE, LASER_SOURCE = 0, 1
 N = 4
 """States: h, vz, b_a, ε_b."""
+BARO_OFFSET = 3
+"""The index of ε_b, the barometer's slow error."""
 ALTITUDE_ROW = ((0, 1.0),)
 """H of a height measurement (laser, GPS), as (state index, coefficient) pairs."""
-BARO_ROW = ((0, 1.0), (3, 1.0))
+BARO_ROW = ((0, 1.0), (BARO_OFFSET, 1.0))
 """H of the barometer: h + ε_b (eq. 14)."""
 MOTION_STATES = np.array([True, True, True, False])
 """h, vz and the accelerometer bias: the states strong tracking always inflates."""
@@ -311,11 +313,12 @@ class XuSHAEKF(Estimator):
 
     def _start(self, z: float, H: tuple[tuple[int, float], ...], R: float) -> None:
         """Start at the first height sample: h = z - (rest of H)·x, uncorrelated with vz."""
-        offset = dict(H).get(3, 0.0)                    # ε_b's coefficient
-        self.x[0] = z - float(offset * self.x[3])
+        b = BARO_OFFSET
+        offset = dict(H).get(b, 0.0)                    # ε_b's coefficient in H
+        self.x[0] = z - float(offset * self.x[b])
         self.P[0, :] = self.P[:, 0] = 0.0
-        self.P[0, 0] = R + offset**2 * self.P[3, 3]
-        self.P[0, 3] = self.P[3, 0] = -offset * self.P[3, 3]
+        self.P[0, 0] = R + offset**2 * self.P[b, b]
+        self.P[0, b] = self.P[b, 0] = -offset * self.P[b, b]
         self.started = True
 
     def reset_height(self, source: str, innovation: float, variance: float) -> None:
@@ -325,7 +328,7 @@ class XuSHAEKF(Estimator):
         """The barometer's offset ε_b (an isolated baro re-admitted, estimators/base.py)."""
         if source != "baro":
             return False
-        shift_state(self.x, self.P, 3, innovation, variance)
+        shift_state(self.x, self.P, BARO_OFFSET, innovation, variance)
         return True
 
     def _publish(self) -> None:
