@@ -87,15 +87,48 @@ def check_params(params: Any) -> None:
             raise ParameterError(info.name, value, f"must be <= {info.max}")
 
 
+TRUE_WORDS = ("1", "true", "yes")
+FALSE_WORDS = ("0", "false", "no")
+"""The texts of a Boolean parameter (any case): xs:boolean's and yes/no."""
+
+
+def parse_boolean(text: str) -> bool:
+    """A Boolean given as text (a command line's ``--set``): one of :data:`TRUE_WORDS` or
+    :data:`FALSE_WORDS` in any case; any other text is refused (ValueError), never taken as
+    false."""
+    word = text.strip().lower()
+    if word in TRUE_WORDS or word in FALSE_WORDS:
+        return word in TRUE_WORDS
+    raise ValueError(f"expected true or false (1 or 0, yes or no), not {text!r}")
+
+
+def parse_integer(text: str) -> int:
+    """An integer given as text: ``3``, or a number with no fraction (``3.0``, ``1e3``); a
+    fraction is refused (ValueError), never cut off."""
+    try:
+        return int(text)
+    except ValueError:
+        value = float(text)
+    if not value.is_integer():
+        raise ValueError(f"expected an integer, not {text!r}")
+    return int(value)
+
+
 def coerce(params_class: type, name: str, value: Any) -> Any:
-    """Convert a value given by a host (FMI, CLI, SSP) to the declared type of ``name``."""
+    """Convert a value given by a host (FMI, CLI, SSP) to the declared type of ``name``; a
+    value that is not of that type (a fraction for an integer, a text other than
+    :func:`parse_boolean`'s for a Boolean) is left as given, for :func:`check_params` to
+    refuse naming the parameter."""
     for info in param_infos(params_class):
         if info.name == name:
             if info.type is bool:
                 if isinstance(value, str):
-                    return value.strip().lower() in ("1", "true", "yes")
+                    try:
+                        return parse_boolean(value)
+                    except ValueError:
+                        return value
                 return bool(value)
-            if info.type is int and isinstance(value, float) and value.is_integer():
-                return int(value)
+            if info.type is int and isinstance(value, float):
+                return int(value) if value.is_integer() else value
             return info.type(value)
     raise KeyError(f"{params_class.__name__} has no parameter '{name}'")

@@ -52,6 +52,8 @@ def cases(plant: Path, tmp: Path) -> dict[str, tuple[list[str], str]]:
         "malformed XML": (["run", str(half_xml)], "half.ssp: not a valid SSP"),
         "FMU missing": (["run", str(no_fmu)], "Atmosphere.fmu missing"),
         "value not a number": (run + ["--set", "plant.mass=abc"], "'plant.mass' expects Real"),
+        "integer with a fraction": (run + ["--set", "atmosphere.seed=2.5"],
+                                    "'atmosphere.seed' expects Integer, not '2.5'"),
         "no component": (run + ["--set", "nosuch.x=1"], "no component 'nosuch'"),
         "no parameter": (run + ["--set", "plant.nosuch=1"], "no parameter 'nosuch'"),
         "no '='": (run + ["--set", "plant.mass"], "expected component.parameter=value"),
@@ -149,7 +151,8 @@ def all_cases(ssp_files, tmp_path):
 
 CASE_NAMES = [
     "missing file", "not a zip", "zip, not SSP", "malformed XML", "FMU missing",
-    "value not a number", "no component", "no parameter", "no '='", "step_size by --set",
+    "value not a number", "integer with a fraction", "no component", "no parameter", "no '='",
+    "step_size by --set",
     "NaN parameter", "infinite parameter", "hanging sub-step", "stop NaN", "stop negative",
     "stop off the grid", "unwritable out", "unknown command", "unknown reproduction",
     "missing log", "log not a ULog", "offset NaN", "offset beyond the log", "no campaign",
@@ -192,6 +195,17 @@ def test_noise_beyond_the_physics_is_refused_at_initialization(ssp_files, tmp_pa
     component = setting.split(".")[0]
     assert err.strip() == (f"error: component '{component}': initialization failed: "
                            f"parameter {message}")
+
+
+def test_a_boolean_that_is_neither_true_nor_false_is_refused(ssp_files, tmp_path, capsys):
+    """``--set estimator.fault_detection=maybe`` ran with the fault layer off (any word but
+    1, true and yes was taken as false); it is the user's mistake, said in one line."""
+    status, _out, err = run_cli(["run", str(ssp_files["yang2020"]), "--stop", "1", "--out",
+                                 str(tmp_path), "--set", "estimator.fault_detection=maybe"],
+                                capsys)
+    assert status == 2, err
+    assert err.strip() == ("error: --set 'estimator.fault_detection=maybe': parameter "
+                           "'estimator.fault_detection' expects Boolean, not 'maybe'")
 
 
 def test_debug_shows_the_traceback(all_cases, capsys):

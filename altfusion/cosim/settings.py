@@ -5,6 +5,7 @@ from typing import Any
 from altfusion.cosim.instances import PY_TYPES, fmu_info
 from altfusion.cosim.ssp import LoadedSystem
 from altfusion.errors import UsageError
+from altfusion.params import parse_boolean, parse_integer
 
 
 def parse_settings(loaded: LoadedSystem, settings: list[str]) -> dict[str, Any]:
@@ -26,11 +27,9 @@ def parse_settings(loaded: LoadedSystem, settings: list[str]) -> dict[str, Any]:
         if var is None or var.causality != "parameter":
             raise UsageError(f"--set {setting!r}: {spec.fmu} has no parameter '{name}'")
         kind = PY_TYPES[var.type]
+        parse = {bool: parse_boolean, int: parse_integer}.get(kind, kind)
         try:
-            if kind is bool:
-                values[path] = text.strip().lower() in ("1", "true", "yes")
-            else:
-                values[path] = kind(float(text)) if kind is int else kind(text)
+            values[path] = parse(text)
         except ValueError as error:
             raise UsageError(f"--set {setting!r}: parameter '{path}' expects "
                              f"{var.type}, not {text!r}") from error
