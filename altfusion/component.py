@@ -23,6 +23,12 @@ DEFAULT_STEP_SIZE = 0.01
 MAX_PENDING_NOTES = 1000
 """Notes kept until a host drains them; older ones are dropped and counted."""
 
+NOTE_INTERVAL = 1.0
+"""Simulated seconds between two notes of one kind (a source's rejected samples, a stream's
+non-finite ones...): those in between are counted, and the next one logged says how many.
+A sensor failed for an hour then fills a host's log with one line per second, not one per
+sample."""
+
 
 class Component(ABC):
     """Base class of core models; subclasses set ``Params`` and implement ``reset``/``update``."""
@@ -46,6 +52,8 @@ class Component(ABC):
         self.clock = TickClock(step_size, start_time)
         self._notes: list[str] = []
         self.dropped_notes = 0
+        self._note_kinds: dict[str, tuple[float, int]] = {}
+        """Each kind of note: when one was last recorded, and how many were held back since."""
         self.configure(self.clock)
         self.reset()
 
@@ -96,8 +104,21 @@ class Component(ABC):
             clock.tick()
             self.update()
 
-    def note(self, message: str) -> None:
-        """Record a warning (an ignored sample, a rejected outlier...) for the host to log."""
+    def note(self, message: str, kind: str | None = None) -> None:
+        """Record a warning (an ignored sample, a rejected outlier...) for the host to log.
+
+        A note of a ``kind`` (one that can come at every sample) is held back and counted if
+        another of that kind was recorded less than :data:`NOTE_INTERVAL` before; the next one
+        recorded says how many were held back."""
+        if kind is not None:
+            now = self.time
+            last, held = self._note_kinds.get(kind, (None, 0))
+            if last is not None and 0.0 <= now - last < NOTE_INTERVAL - 1e-9:   # (rounding)
+                self._note_kinds[kind] = (last, held + 1)
+                return
+            if held:
+                message += f" ({held} more since t = {last!r} s not logged)"
+            self._note_kinds[kind] = (now, 0)
         if len(self._notes) >= MAX_PENDING_NOTES:
             self._notes.pop(0)
             self.dropped_notes += 1

@@ -74,6 +74,31 @@ def test_non_finite_samples_are_ignored_and_noted(cls, bad):
     assert any("non-finite sample ignored" in n and "gps" in n for n in notes)
 
 
+def test_a_failed_stream_is_noted_once_per_second_and_counted_at_every_sample():
+    """A baro delivering NaN at 100 Hz for 3 s (a failed sensor) writes one note per
+    NOTE_INTERVAL (1 s), not 300: the first at once, the next ones each saying how many
+    were held back since the last; ``n_ignored`` counts all 300. A GPS 1 km off, rejected at
+    each of its 10 Hz samples for 3 s while the baro holds the height, likewise: three
+    notes, every rejection counted."""
+    feeder = StreamFeeder(BaselineKF(step_size=0.01))
+    for k in range(100):
+        feeder.step(**baro_gps(baro=100.0, gps=100.0 if (k + 1) % 10 == 0 else None))
+    e = feeder.estimator
+    e.take_notes()
+    for _ in range(300):
+        feeder.step(**baro_gps(baro=math.nan))
+    for k in range(300):
+        feeder.step(**baro_gps(baro=100.0, gps=1100.0 if (k + 1) % 10 == 0 else None))
+    notes = e.take_notes()
+    baro = [n for n in notes if "baro: non-finite sample ignored" in n]
+    gps = [n for n in notes if "gps: sample rejected" in n]
+    assert e.n_ignored == 300 and e.n_rejected == 30
+    assert len(baro) == 3 and "more since" not in baro[0]
+    assert all("(99 more since t = " in n and "s not logged)" in n for n in baro[1:])
+    assert len(gps) == 3 and "more since" not in gps[0]
+    assert all("(9 more since t = " in n for n in gps[1:])
+
+
 @pytest.mark.parametrize("cls", ESTIMATORS)
 def test_gps_without_fix_is_not_fused(cls):
     feeder = StreamFeeder(cls(step_size=0.2))

@@ -210,7 +210,8 @@ class BaoDriftEstimator(Estimator):
                 self.wind_error = wind_error(p_baro, wind, p.air_density, p.H0, p.p0, p.T0,
                                              p.lapse_rate)
             else:
-                self.note(f"baro: pressure {p_baro!r} Pa is not positive; no wind correction")
+                self.note(f"baro: pressure {p_baro!r} Pa is not positive; no wind correction",
+                          "baro pressure")
         self.h_baro = h_baro
         self.h_baro_corrected = h_baro + self.principle_error + self.wind_error
         self.started = True

@@ -103,7 +103,8 @@ class Gating:
             self.note(f"{source.name}: rejected for {now - source.rejected_since:.3g} s while "
                       f"other sources are fused: isolated until a sample passes the gate")
         self.note(f"{source.name}: sample rejected (innovation {innovation:.4g}, test ratio "
-                  f"{ratio:.3g}{', persistently biased' if biased else ''})")
+                  f"{ratio:.3g}{', persistently biased' if biased else ''})",
+                  f"{source.name} rejected")
         return Verdict.REJECTED
 
     def _accelerometer_suspect(self) -> bool:

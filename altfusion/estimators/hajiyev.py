@@ -165,7 +165,8 @@ class HajiyevAdaptiveEstimator(Estimator):
             self._baro_sample(sample["baro_h"], sample["baro_time"])
             return
         if not self.has_sample("baro"):
-            self.note("gps: sample before the first baro sample not fused (no h_B for eq. 18)")
+            self.note("gps: sample before the first baro sample not fused (no h_B for eq. 18)",
+                      "gps before baro")
             return
         if self.params.fault_detection:
             self._fault_layer_gps(sample["gps_h"], sample["gps_time"])

@@ -100,7 +100,7 @@ class SampleIntake:
         last_count[prefix] = count
         if count > last + 1:
             self.note(f"{prefix}: {count - last - 1} sample(s) arrived between two "
-                      f"estimator steps; only the latest is fused")
+                      f"estimator steps; only the latest is fused", f"{prefix} skipped")
         if stream.valid and not getattr(self, stream.valid):
             return None
         sample = dict(zip(stream.fields, map(float, stream.read(self))))  # noqa: B905 (fast)
@@ -127,7 +127,8 @@ class SampleIntake:
                 self.refuse_implausible(self.aid[source], value, bound)
                 return None
         if prefix in self._held:
-            self.note(f"{prefix}: a held sample was replaced before it was due")
+            self.note(f"{prefix}: a held sample was replaced before it was due",
+                      f"{prefix} replaced")
         if lead > 0.0:
             self._step_flags |= STEP_BITS.SAMPLE_HELD
         self._seen.add(prefix)
@@ -140,11 +141,11 @@ class SampleIntake:
         self.aid[stream.prefix].refused()
         self.n_rejected += 1
         self._step_flags |= STEP_BITS.SAMPLE_REFUSED
-        self.note(f"{stream.prefix}: {message}")
+        self.note(f"{stream.prefix}: {message}", f"{stream.prefix} refused")
 
     def _ignore(self, stream: Stream, message: str) -> None:
         self.n_ignored += 1
-        self.note(f"{stream.prefix}: {message}")
+        self.note(f"{stream.prefix}: {message}", f"{stream.prefix} ignored")
 
     def has_sample(self, prefix: str) -> bool:
         """True once the stream ``prefix`` has delivered a valid sample (or had one at the

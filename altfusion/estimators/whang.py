@@ -205,7 +205,7 @@ class WhangGAEstimator(Estimator):
         """The z-update (eqs. 23-31), once an air-data sample gives h^B (a deviation)."""
         if not self.has_sample("baro"):
             self.note("gps: sample before the first air-data sample not fused (z = h^B - "
-                      "h^GPS needs h^B)")
+                      "h^GPS needs h^B)", "gps before baro")
             return
         self._z_update(h_gps)
 
