@@ -13,8 +13,12 @@ TIME = np.arange(0, 10.5, 0.5)
 
 def write_campaign(folder, errors: np.ndarray, runs: int | None = None, time=TIME):
     """A campaign whose run r records truth h = 100 + t and estimate h + errors[r]."""
-    write_manifest(folder, {"runs": runs or len(errors), "master_seed": 0,
-                            "system": {"name": "synthetic"},
+    write_manifest(folder, {"format": 1, "runs": runs or len(errors), "master_seed": 0,
+                            "system": {"name": "synthetic"}, "ssp": "synthetic.ssp",
+                            "ssp_sha256": "0" * 64, "parameters": {},
+                            "seeded_components": ["est"], "recorded": ["true.h", "est.h"],
+                            "versions": {}, "created": "2026-01-01T00:00:00+00:00",
+                            "sessions": [],
                             "metrics": [{"name": "h error", "estimate": "est.h",
                                          "truth": "true.h"}]})
     for index, error in enumerate(errors):

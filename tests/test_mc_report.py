@@ -31,7 +31,7 @@ def manifest(name: str, runs: int, estimators) -> dict:
     return {"runs": runs, "master_seed": 7, "stop_time": 20.0, "ssp": "/m/fault_flight.ssp",
             "ssp_sha256": "0" * 64, "parameters": {}, "seeded_components": ["plant"],
             "created": "2026-01-01T00:00:00+00:00", "versions": {"numpy": "x"},
-            "metrics": metrics,
+            "format": 1, "recorded": ["plant.h"], "sessions": [], "metrics": metrics,
             "system": {"name": name, "description": "synthetic", "components": [],
                        "connections": [], "metrics": metrics, "record": [],
                        "base_step": 0.5, "output_interval": None, "start_time": 0.0}}

@@ -6,13 +6,18 @@ import pytest
 from altfusion.atomic import atomic_write
 from altfusion.cosim.results import Results
 from altfusion.montecarlo.storage import (
+    MANIFEST,
+    MANIFEST_FIELDS,
+    DamagedManifestError,
     RunRecord,
     damaged_runs,
     failed_runs,
     finished_runs,
+    read_manifest,
     read_run,
     run_path,
     write_failure,
+    write_manifest,
     write_run,
 )
 
@@ -97,3 +102,36 @@ def test_resume_finds_a_valid_npz_of_the_wrong_dtype_or_shape_damaged(tmp_path, 
     damaged = damaged_runs(tmp_path)
     assert list(damaged) == [1]
     assert damaged[1].startswith("run_00001.npz: ") and reason in damaged[1]
+
+
+def valid_manifest() -> dict:
+    """A manifest with every field :func:`read_manifest` checks, of its type."""
+    examples = {int: 1, dict: {}, str: "x", list: []}
+    return {key: examples[kind] for key, kind in MANIFEST_FIELDS.items()}
+
+
+def test_a_manifest_with_its_fields_reads_back(tmp_path):
+    manifest = {**valid_manifest(), "stop_time": None, "extra": [1, 2]}
+    write_manifest(tmp_path, manifest)
+    assert read_manifest(tmp_path) == manifest
+
+
+@pytest.mark.parametrize(("text", "reason"), [
+    (b"{bad", "not a campaign manifest (Expecting property name"),
+    (b"\xff\xfe\x00", "not a campaign manifest ("),
+    (b"[1]", "(a JSON list, not an object)"),
+    (b"{}", "runs (missing)"),
+    (b'{"runs": "3"}', "runs (not int)"),
+    (b'{"runs": true}', "runs (not int)"),
+    (b'{"system": []}', "system (not dict)"),
+])
+def test_a_damaged_manifest_is_refused_naming_the_file(tmp_path, text, reason):
+    """A manifest that is not JSON, not an object, or lacks a field the commands read (or
+    has it of another type: a Boolean is not a run count) is refused naming the file and
+    what is wrong, instead of a KeyError or TypeError halfway through ``report``."""
+    (tmp_path / MANIFEST).write_bytes(text)
+    with pytest.raises(DamagedManifestError) as error:
+        read_manifest(tmp_path)
+    message = str(error.value)
+    assert message.startswith(f"{tmp_path / MANIFEST}: not a campaign manifest")
+    assert reason in message

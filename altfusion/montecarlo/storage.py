@@ -164,8 +164,36 @@ def write_manifest(out: Path, manifest: dict[str, Any]) -> Path:
     return write_text(Path(out) / MANIFEST, text)
 
 
+MANIFEST_FIELDS = {"format": int, "system": dict, "ssp": str, "ssp_sha256": str, "runs": int,
+                   "master_seed": int, "parameters": dict, "seeded_components": list,
+                   "recorded": list, "metrics": list, "versions": dict, "created": str,
+                   "sessions": list}
+"""The fields of a campaign's manifest that are read back, and their JSON types."""
+
+
+class DamagedManifestError(ValueError):
+    """A ``manifest.json`` that is not a campaign's manifest (unreadable, not JSON, a field
+    missing or of another type)."""
+
+
 def read_manifest(out: Path) -> dict[str, Any]:
-    return json.loads((Path(out) / MANIFEST).read_text())
+    """The campaign manifest in ``out``, checked to be one: a JSON object with every field of
+    :data:`MANIFEST_FIELDS` of its type (bytes from outside: a damaged or foreign file is
+    refused naming it, not read into a KeyError halfway through a command)."""
+    path = Path(out) / MANIFEST
+    try:
+        manifest = json.loads(path.read_bytes())
+    except (UnicodeDecodeError, json.JSONDecodeError) as error:
+        raise DamagedManifestError(f"{path}: not a campaign manifest ({error})") from None
+    if not isinstance(manifest, dict):
+        raise DamagedManifestError(f"{path}: not a campaign manifest (a JSON "
+                                   f"{type(manifest).__name__}, not an object)")
+    wrong = [f"{key} ({'missing' if key not in manifest else 'not ' + kind.__name__})"
+             for key, kind in MANIFEST_FIELDS.items()
+             if not isinstance(manifest.get(key), kind) or isinstance(manifest[key], bool)]
+    if wrong:
+        raise DamagedManifestError(f"{path}: not a campaign manifest: {', '.join(wrong)}")
+    return manifest
 
 
 def has_manifest(out: Path) -> bool:
