@@ -19,6 +19,11 @@ from altfusion.errors import ParameterError, StepError
 TICK_TOLERANCE = 1e-3
 """How close (in ticks) a step's end or start must come to a tick's time to count as it."""
 
+MAX_TICKS_PER_STEP = 10**8
+"""Most ticks one doStep may run: 11.6 days at a 0.01 s tick, about 3 to 60 minutes of
+computing. A longer request (a host's 1e12 s step against a 0.01 s tick: 1e14 ticks, a hang
+of years holding the interpreter) is refused, the state unchanged."""
+
 
 def exact(value: float) -> Fraction:
     """The decimal a float was written as (0.01 -> 1/100), via its shortest repr."""
@@ -76,19 +81,25 @@ class TickClock:
 
         The usual request, one tick from the current tick, takes the first test. Otherwise
         ``current_time`` must be where the previous request ended (within the tolerance) and
-        ``step_size`` positive and finite; the request ends at ``current_time + step_size``.
+        ``step_size`` positive and finite; the request ends at ``current_time + step_size``
+        and may run at most :data:`MAX_TICKS_PER_STEP` ticks. A refused request (StepError)
+        changes nothing.
         """
         if (self._on_grid and abs(step_size - self.step_size) <= self._step_tolerance
                 and abs(current_time - self.now) <= self._time_tolerance):
             return 1
         if not (step_size > 0.0 and math.isfinite(step_size)):
             raise StepError(f"communication step {step_size!r} s: must be positive and finite")
-        if abs(current_time - self.host_time) > self._time_tolerance:
+        if not abs(current_time - self.host_time) <= self._time_tolerance:   # NaN included
             raise StepError(f"doStep at t = {current_time!r} s, but this component is at "
                             f"t = {self.host_time!r} s")
         end = current_time + step_size
         last = max(self.ticks,
                    math.floor((end - self._start_time) / self.step_size + TICK_TOLERANCE))
+        if last - self.ticks > MAX_TICKS_PER_STEP:
+            raise StepError(f"communication step {step_size!r} s would run {last - self.ticks} "
+                            f"ticks of {self.step_size!r} s, more than {MAX_TICKS_PER_STEP} in "
+                            "one doStep: take shorter steps")
         # A step ending on a tick puts the host back on the grid (the fast path again).
         self._on_grid = abs(end - self.time(last)) <= self._time_tolerance
         self._host_end = end

@@ -7,7 +7,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from altfusion.errors import ParameterError, StepError
-from altfusion.timegrid import TickClock
+from altfusion.timegrid import MAX_TICKS_PER_STEP, TickClock
 
 
 @given(n=st.integers(min_value=0, max_value=10**9),
@@ -91,7 +91,22 @@ def test_a_request_not_at_the_end_of_the_last_or_not_positive_is_refused():
     for bad in (0.0, -0.01, float("nan"), float("inf")):
         with pytest.raises(StepError, match="must be positive and finite"):
             clock.due(0.01, bad)
+    for bad in (float("nan"), float("inf")):
+        with pytest.raises(StepError, match=f"doStep at t = {bad!r} s, but this component"):
+            clock.due(bad, 0.01)
     assert clock.ticks == 1
+
+
+def test_a_request_running_more_ticks_than_the_limit_is_refused_and_changes_nothing():
+    clock = TickClock(0.01)
+    largest = MAX_TICKS_PER_STEP * 0.01
+    assert clock.due(0.0, largest) == MAX_TICKS_PER_STEP          # the limit itself runs
+    clock = TickClock(0.01)
+    run(clock, 0.0, 0.005)                                         # off the grid
+    with pytest.raises(StepError, match=f"would run {MAX_TICKS_PER_STEP + 1} ticks of 0.01 s"):
+        clock.due(0.005, largest + 0.01)
+    assert (clock.ticks, clock.host_time) == (0, 0.005)
+    assert run(clock, 0.005, 0.005) == 1
 
 
 def test_step_size_must_be_positive():

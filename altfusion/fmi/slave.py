@@ -13,7 +13,13 @@ FMI behaviour that pythonfmu 0.7.0 leaves to us:
   return an error status, so a failed initialization (a bad parameter) is logged and every
   later ``doStep`` returns fmi2Discard with the reason. The native shim
   (:mod:`altfusion.fmi.shim`) returns the worst status logged during a call, so with it
-  such calls return fmi2Error.
+  such calls return fmi2Error. A refused request of the host's (a parameter value out of its
+  bounds, a doStep not starting where the last one ended, a step not positive and finite or
+  running more than :data:`~altfusion.timegrid.MAX_TICKS_PER_STEP` ticks) is logged by its
+  message alone, without a traceback.
+* Parameters are ``fixed``: the core is built from them when initialization ends, so setting
+  one once the instance steps is refused (fmi2Error naming it and the value it keeps); a
+  host's tuning would otherwise read back a value the core does not run on.
 * The FMU state is the whole core object (filter state, random generators, tick clock), deep
   copied on get and set. Serialized, it is data, never code (:mod:`altfusion.fmi.state`): a
   header naming the model, GUID and core version, then a tagged JSON tree. pythonfmu turns
@@ -70,6 +76,7 @@ from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Status
 
 from altfusion.component import DEFAULT_STEP_SIZE, Component
+from altfusion.errors import ParameterError, StepError
 from altfusion.fmi import state as fmu_state
 from altfusion.fmi.bundle import public_module
 from altfusion.fmi.guid import interface_guid
@@ -186,6 +193,7 @@ class CoreSlave(Fmi2Slave, metaclass=ReusedSlaveClass):
         self._failure: str | None = None
         self._initializing = False
         self._stale = False
+        self._stepping = False
         self.core = self.core_class()
         for info in self.parameter_infos():
             self._register(info.name, info.type, Fmi2Causality.parameter, Fmi2Variability.fixed,
@@ -282,7 +290,15 @@ class CoreSlave(Fmi2Slave, metaclass=ReusedSlaveClass):
         return lambda: getattr(self._owner(code), attribute)
 
     def _param_setter(self, name: str):
+        """The setter of parameter ``name``: its value checked when initialization ends; once
+        the instance steps, refused (variability fixed: the core was built from it)."""
+        current = self._getter(name)
+
         def set_value(value: Any) -> None:
+            if self._stepping:
+                raise ParameterError(name, value, "fixed, it can be set before "
+                                     "exitInitializationMode only; the instance keeps "
+                                     f"{current()!r}")
             if name == STEP_SIZE.name:
                 self._step_size = float(value)
             else:
@@ -303,7 +319,13 @@ class CoreSlave(Fmi2Slave, metaclass=ReusedSlaveClass):
         self.log(message.replace("%", "%%"), status)
 
     def _log_exception(self, where: str) -> None:
+        """Log the exception being handled at fmi2Error severity: a refused request of the
+        host's (a bad parameter value, a step the component cannot take) by its message, any
+        other with its traceback."""
         error = sys.exc_info()[1]
+        if isinstance(error, ParameterError | StepError):
+            self._log(Fmi2Status.error, f"{where} refused: {error}")
+            return
         self._log(Fmi2Status.error, f"{where} failed: {type(error).__name__}: {error}\n"
                                     f"{traceback.format_exc()}")
 
@@ -349,6 +371,7 @@ class CoreSlave(Fmi2Slave, metaclass=ReusedSlaveClass):
     def enter_initialization_mode(self) -> None:
         # Errors are reported when initialization ends, once every parameter is set.
         self._initializing = True
+        self._stepping = False
         self._refresh_initial_outputs(force=True)
 
     def _refresh_initial_outputs(self, force: bool = False) -> None:
@@ -360,6 +383,7 @@ class CoreSlave(Fmi2Slave, metaclass=ReusedSlaveClass):
 
     def exit_initialization_mode(self) -> None:
         self._initializing = self._stale = False
+        self._stepping = True
         try:
             self._rebuild_core()
             self._failure = None
