@@ -1,13 +1,18 @@
 """The GUID is a digest of the FMU's whole interface and the sources that define it: the
 same sources build to the same GUID, a changed interface (two outputs' value references
-swapped) to another, and the running instance carries the GUID of its modelDescription."""
+swapped) to another, and the running instance carries the GUID of its modelDescription: an
+instance asked for with another GUID is refused."""
 
+import re
 import shutil
+from dataclasses import replace
 from pathlib import Path
 
+import pytest
 from fmpy import read_model_description
 
 import build_fmu
+from altfusion.cosim.instances import CosimError, FmuInstance, fmu_info
 
 SCRIPT = build_fmu.HERE / "fmu_src" / "baseline_kf_slave.py"
 FIRST, SECOND = ('fmi.Output("bias", "m", "Estimated baro bias b"),',
@@ -46,3 +51,21 @@ def test_a_copy_of_the_script_elsewhere_keeps_the_guid(fmus, tmp_path):
     shutil.copy(SCRIPT, copy)
     assert built_guid(copy, tmp_path / "out") == read_model_description(
         str(fmus["BaselineKF"])).guid
+
+
+def test_an_instance_asked_for_with_another_builds_guid_is_refused_naming_both(fmus):
+    """A host holding another build's modelDescription.xml (value references that may name
+    other variables) gets no instance, and its log says why; the right GUID still works.
+    (Through the runner's instances: their logger outlives fmpy's default one, which another
+    fmpy user in the process may have freed.)"""
+    info = fmu_info(fmus["Atmosphere"])
+    stale = "11111111-2222-5333-8444-555555555555"
+    with pytest.raises(CosimError, match=re.escape(
+            f"component 'atmosphere': fmi2Instantiate: GUID '{stale}' is not this FMU's "
+            f"('{info.guid}'): the host read the modelDescription.xml of another build")):
+        FmuInstance("atmosphere", replace(info, guid=stale))
+    instance = FmuInstance("atmosphere", info)
+    instance.initialize({}, 0.01, 0.0, 1.0)
+    instance.exit_initialization()
+    instance.do_step(0.0, 0.01)
+    instance.free()

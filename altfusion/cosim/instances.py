@@ -291,7 +291,12 @@ class FmuInstance:
         self.warnings: list[str] = []
         self.fmu = FMU2Slave(guid=info.guid, unzipDirectory=folder,
                              modelIdentifier=info.model_name, instanceName=self.instance_name)
-        self.fmu.instantiate(callbacks=router.callbacks, loggingOn=True)
+        try:
+            self.fmu.instantiate(callbacks=router.callbacks, loggingOn=True)
+        except Exception as error:          # fmpy: "Failed to instantiate model"; the log why
+            details = "\n".join(m for _, m in self.messages) or str(error)
+            router.queues.pop(self.instance_name, None)
+            raise CosimError(f"component '{name}': {details}") from None
         self._component = ctypes.c_void_p(self.fmu.component)
         _track_library(info.path, self.fmu)
 

@@ -38,6 +38,10 @@
  *    fmi2ExitInitializationMode), fmi2Get/Set of inputs and outputs read and write the core's
  *    attributes and fmi2DoStep calls the slave's do_step, without pythonfmu's bridge (see
  *    "direct access" below).
+ *  - The GUID is checked: fmi2Instantiate with a GUID other than the one the slave computes
+ *    from its interface (altfusion.fmi.guid, the one in this FMU's modelDescription.xml)
+ *    returns NULL, saying both: the host read another build's description, whose value
+ *    references may name other variables (pythonfmu does not look at the GUID).
  *  - Instances are reused: fmi2FreeInstance resets a healthy instance (fmi2Reset) and keeps
  *    up to POOL_SIZE of them; fmi2Instantiate of the same GUID and resources hands one back.
  *    pythonfmu re-executes the slave script at each fmi2Instantiate and keeps ~1 kB per call.
@@ -949,6 +953,25 @@ static fmi2Status do_step_direct(Instance* inst, fmi2Real t, fmi2Real h) {
 }
 
 /* ---------------------------------------------------------------- life cycle */
+/* Whether `guid` is the GUID of the slave pythonfmu made for `inst` (its `guid` attribute);
+ * if not, the reason in `error`. A slave not taken for direct access (not a CoreSlave) is not
+ * checked. */
+static int guid_matches(const Instance* inst, fmi2String guid, char* error, size_t size) {
+    if (!inst->slave) return 1;
+    PyGILState_STATE gil = PyGILState_Ensure();
+    PyObject* own = PyObject_GetAttrString(inst->slave, "guid");
+    const char* text = own ? PyUnicode_AsUTF8(own) : NULL;
+    int same = !text || (guid && strcmp(guid, text) == 0);
+    if (!same)
+        snprintf(error, size, "GUID '%s' is not this FMU's ('%s'): the host read the "
+                 "modelDescription.xml of another build, whose value references may name "
+                 "other variables; import this FMU again", guid ? guid : "(null)", text);
+    if (own) Py_DecRef(own);
+    PyErr_Clear();
+    PyGILState_Release(gil);
+    return same;
+}
+
 static Instance* take_pooled(fmi2String guid, const char* resources, fmi2Type type) {
     Instance* found = NULL;
     pthread_mutex_lock(&lock);
@@ -1029,6 +1052,12 @@ EXPORT fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String 
                                                                visible, fmi2True));
     free(uri);
     if (!inst->inner) {
+        destroy(inst);
+        return NULL;
+    }
+    if (!guid_matches(inst, guid, error, sizeof error)) {
+        log_own(&probe, fmi2Error, "fmi2Instantiate: %s", error);
+        pythonfmu.fmi2FreeInstance(inst->inner);
         destroy(inst);
         return NULL;
     }
