@@ -2,8 +2,6 @@
 and the instance goes on as before: a fixed parameter set while the instance steps, a doStep
 at a time that is not a number, a communication step that would run 1e14 ticks."""
 
-import time
-
 import pytest
 
 from altfusion.cosim.instances import CosimError, FmuInstance, fmu_info
@@ -38,14 +36,10 @@ def test_a_fixed_parameter_set_while_stepping_is_refused_and_kept(atmosphere):
 
 def test_a_step_running_more_ticks_than_one_dostep_may_is_refused_at_once(atmosphere):
     instance, refs = atmosphere
-    start = time.monotonic()
     with pytest.raises(CosimError, match=r"communication step 1000000000000.0 s would run "
                                          r"100000000000000 ticks of 0.01 s, more than "
                                          f"{MAX_TICKS_PER_STEP}"):
         instance.do_step(0.0, 1e12)
-    # Not a speed target: the refusal comes before any tick runs, where the request itself
-    # would run 1e14 ticks (years); a minute tells the two apart on any machine.
-    assert time.monotonic() - start < 60.0
     instance.do_step(0.0, 0.01)                      # the clock did not move
     assert instance.get("Real", [refs["p_static"]]) == [100000.0]
 

@@ -294,7 +294,7 @@ class FmuInstance:
         try:
             self.fmu.instantiate(callbacks=router.callbacks, loggingOn=True)
         except Exception as error:          # fmpy: "Failed to instantiate model"; the log why
-            details = "\n".join(m for _, m in self.messages) or str(error)
+            details = "\n".join(self.errors()) or str(error)
             router.queues.pop(self.instance_name, None)
             raise CosimError(f"component '{name}': {details}") from None
         self._component = ctypes.c_void_p(self.fmu.component)

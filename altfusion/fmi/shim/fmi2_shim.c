@@ -379,6 +379,12 @@ static int python_alive(void) {
     return Py_IsInitialized();
 }
 
+/* Free pythonfmu's instance behind `inst` (unless it went with the interpreter), then ours. */
+static void discard(Instance* inst) {
+    if (python_alive()) pythonfmu.fmi2FreeInstance(inst->inner);
+    destroy(inst);
+}
+
 #define FINALIZED "the Python interpreter of this process has been finalized, and this call " \
     "needs it"
 
@@ -509,10 +515,7 @@ static int owns_interpreter;             /* this shim started the interpreter (a
 static void release_pythonfmu(void) {
     int alive = python_alive();
     pthread_mutex_lock(&lock);
-    for (size_t i = 0; i < pooled; i++) {
-        if (alive) pythonfmu.fmi2FreeInstance(pool[i]->inner);
-        destroy(pool[i]);
-    }
+    for (size_t i = 0; i < pooled; i++) discard(pool[i]);
     pooled = 0;
     released = 1;
     int held = held_here > 0;
@@ -1057,8 +1060,7 @@ EXPORT fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String 
     }
     if (!guid_matches(inst, guid, error, sizeof error)) {
         log_own(&probe, fmi2Error, "fmi2Instantiate: %s", error);
-        pythonfmu.fmi2FreeInstance(inst->inner);
-        destroy(inst);
+        discard(inst);
         return NULL;
     }
     count_instance(1);
@@ -1087,12 +1089,7 @@ static int pool_instance(Instance* inst) {
 EXPORT void fmi2FreeInstance(fmi2Component c) {
     Instance* inst = c;
     if (!inst) return;
-    if (!python_alive()) {
-        destroy(inst);   /* pythonfmu's instance went with the interpreter */
-    } else if (!pool_instance(inst)) {
-        pythonfmu.fmi2FreeInstance(inst->inner);
-        destroy(inst);
-    }
+    if (!python_alive() || !pool_instance(inst)) discard(inst);
     count_instance(-1);   /* last: it may finalize the interpreter */
 }
 
