@@ -77,7 +77,9 @@ Deviations from PX4 EKF2 (reasons in docs/altitude_ekf.md):
 """
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 
 from altfusion.errors import ParameterError
 from altfusion.estimators.aid_source import FUSED
@@ -96,7 +98,7 @@ from altfusion.estimators.noise_check import NoiseCheck
 from altfusion.estimators.process_noise import MotionNoise, maximum_scale
 from altfusion.estimators.range_aid import RangeAid
 from altfusion.estimators.streams import ACC, BARO_ALL, GPS_ALL, LASER, RADAR
-from altfusion.estimators.stuck import StuckCheck
+from altfusion.estimators.stuck import StillReceiver, StuckCheck
 from altfusion.params import param
 
 H, V, BA, D, K, T, G = range(7)
@@ -276,6 +278,8 @@ class AltitudeEKF(Estimator):
         self.stuck_checks = {name: StuckCheck(p.stuck_samples) for name in self.aid} \
             if p.fault_detection and p.stuck_samples > 0 else {}
         """Each source's check for a stuck reading (none without the fault layer)."""
+        self.gnss_still = StillReceiver()
+        """The GNSS's heights over its current run of vertical speeds reading 0."""
         self.range_aid = RangeAid((self.aid["radar"], self.aid["laser"]), self._heights,
                                   p.range_aid_max_height, p.range_hysteresis) \
             if p.range_aid else None
@@ -373,9 +377,14 @@ class AltitudeEKF(Estimator):
         gps = samples.get(GPS_ALL)
         if gps is not None:
             instant = gps["gps_time"] - self.params.gps_delay
-            if not self._stuck("gps", gps["gps_h"]):
+            if gps["gps_vz"] == 0.0:
+                self.gnss_still.add(instant, gps["gps_h"])
+            elif self.gnss_still.n:
+                self.gnss_still.restart()
+            at_rest = partial(self._gnss_at_rest, gps)
+            if not self._stuck("gps", gps["gps_h"], at_rest):
                 self._fuse_height("gps", gps["gps_h"], instant, self._gps_sigma(gps))
-            if self.started and not self._stuck("gps_vz", gps["gps_vz"]):
+            if self.started and not self._stuck("gps_vz", gps["gps_vz"], at_rest):
                 self._fuse_speed(gps["gps_vz"], instant)
         baro = samples.get(BARO_ALL)
         if baro is not None and not self._stuck("baro", baro["baro_h"]):
@@ -401,22 +410,42 @@ class AltitudeEKF(Estimator):
         self._adapt_motion_noise()
         self._publish()
 
-    def _stuck(self, source: str, reading: float) -> bool:
-        """``source``'s reading is stuck (:mod:`~altfusion.estimators.stuck`): refused
-        (counted), its noise check's pair broken; when it sticks, isolated (a failed sensor,
-        until a changed reading passes its gate) and noted."""
+    def _stuck(self, source: str, reading: float,
+               at_rest: Callable[[], bool] | None = None) -> bool:
+        """``source``'s reading is stuck (:mod:`~altfusion.estimators.stuck`): not fused, its
+        noise check's pair broken. A GNSS reading repeated while ``at_rest`` (the receiver
+        holds still: :meth:`_gnss_at_rest`) is only held; any other is refused (counted) and,
+        when it sticks, isolated (a failed sensor, until a changed reading passes its gate)
+        and noted."""
         check = self.stuck_checks.get(source)
         if check is None or not check.stuck(reading):
             return False
-        aid = self.aid[source]
-        if check.repeats == check.limit:
-            aid.isolate()
-            self.note(f"{source}: the same reading {reading:.6g} {check.limit + 1} times in a row: "
-                      f"stuck, isolated until it changes and passes its gate")
-        aid.refused()
         if source in self.noise_checks:
             self.noise_checks[source].forget()
+        aid = self.aid[source]
+        if at_rest is not None and not aid.isolated and at_rest():
+            if check.repeats == check.limit:
+                self.note(f"{source}: the same reading {reading:.6g} {check.limit + 1} times "
+                          f"in a row with the vertical speed at 0: the receiver holds still "
+                          f"(static hold); not fused while it repeats, not a fault")
+            return True
+        if check.repeats == check.limit or not aid.isolated:
+            aid.isolate()
+            self.note(f"{source}: the same reading {reading:.6g} {check.repeats + 1} times in "
+                      f"a row: stuck, isolated until it changes and passes its gate")
+        aid.refused()
         return True
+
+    def _gnss_at_rest(self, sample) -> bool:
+        """The GNSS receiver holds still (:class:`~altfusion.estimators.stuck.StillReceiver`):
+        its vertical speed reads exactly 0 and its heights since the speed first read 0
+        show no slope beyond the gate, judged with the GNSS height noise of this
+        ``sample``. Never without a gate."""
+        gate = self.params.gate_sigma
+        if sample["gps_vz"] != 0.0 or gate <= 0.0:
+            return False
+        sigma = math.sqrt(self._noise_variance("gps", self._gps_sigma(sample)))
+        return self.gnss_still.still(sigma, gate)
 
     def _update_range_aid(self) -> None:
         """The conditional range aid decided for this step: the terrain held while it is

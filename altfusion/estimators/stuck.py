@@ -16,7 +16,15 @@ until it changes; the estimator does not fuse it meanwhile. PX4 EKF2 has no such
 values (it checks that samples arrive, by their timestamps); ArduPilot's EKF3 declares a
 GPS stale on an unchanged time of week. Deviation: values, not timestamps, are compared,
 since an unconnected value arrives with fresh stamps.
+
+A receiver at rest repeats itself too: u-blox's static hold (its integration manuals) keeps
+the position and sets the velocity to zero while it sees no movement, and PX4 SITL's GNSS
+reports a vertical speed of exactly 0.0 on the ground (measured in the pyulog sample log:
+gps_vz 0.0 for 9 s). :class:`StillReceiver` tells it from an unconnected 0 by the
+receiver's own heights over the run of zeros: a receiver that holds still does not climb.
 """
+
+import math
 
 
 class StuckCheck:
@@ -39,3 +47,44 @@ class StuckCheck:
         else:
             self.last, self.repeats = value, 0
         return 0 < self.limit <= self.repeats
+
+
+class StillReceiver:
+    """Whether a GNSS receiver whose vertical speed reads exactly 0 holds still: the slope of
+    its heights over the run of zeros (least squares, from the run's first sample) lies
+    within ``gate`` standard deviations of 0 (:meth:`still`). An unconnected speed input
+    reads 0 while the receiver's heights climb or descend: 10 m/s over ten 1 Hz samples of
+    13 m noise is 7 standard deviations of the slope."""
+
+    __slots__ = ("t0", "n", "sum_t", "sum_tt", "sum_h", "sum_th")
+
+    def __init__(self) -> None:
+        self.restart()
+
+    def restart(self) -> None:
+        """Forget the run (its speed read other than 0)."""
+        self.t0 = 0.0
+        self.n = 0
+        self.sum_t = self.sum_tt = self.sum_h = self.sum_th = 0.0
+
+    def add(self, t: float, h: float) -> None:
+        """A sample of the run: height ``h`` at time ``t`` (s, relative to the run's first
+        sample, so that the sums do not cancel)."""
+        if self.n == 0:
+            self.t0 = t
+        t -= self.t0
+        self.n += 1
+        self.sum_t += t
+        self.sum_tt += t * t
+        self.sum_h += h
+        self.sum_th += t * h
+
+    def still(self, sigma: float, gate: float) -> bool:
+        """The heights' slope b over the run and its variance σ²·n/D (σ the heights' noise,
+        D = nΣt² - (Σt)²): True if b² ≤ gate²·Var b; False with fewer than two instants."""
+        n = self.n
+        spread = n * self.sum_tt - self.sum_t * self.sum_t
+        if n < 2 or spread <= 0.0:
+            return False
+        slope = (n * self.sum_th - self.sum_t * self.sum_h) / spread
+        return slope * slope * spread <= gate * gate * sigma * sigma * n and math.isfinite(slope)
