@@ -279,3 +279,7 @@ def test_altfusion_replay_says_the_health_events_and_writes_them(fmus, tmp_path,
     assert events.read_text() == events_csv(health_events(results))
     said = out.split("health events")[1]
     assert "  BaselineKF\n" in said and "  AltitudeEKF\n" in said and " initialized" in said
+    # The simulated receiver reads a vertical speed of exactly 0.0 on the ground: a GNSS
+    # holding still, not a stuck one (before: gps_vz isolated at 9.7 s, 257 rejections).
+    assert "isolated" not in said and "rejected" not in said
+    assert results["AltitudeEKF.gps_vz_rejected"].max() == 0
