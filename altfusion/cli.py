@@ -142,6 +142,10 @@ def command_replay(args: argparse.Namespace) -> int:
     from altfusion.replay.ulog import LogReadError
 
     fmu_paths = {path.stem: path for path in Path(args.models).glob("*.fmu")}
+    if not fmu_paths:
+        print(f"error: no FMU in {args.models} (build them: python build_fmu.py, or give "
+              f"their folder with --models)", file=sys.stderr)
+        return 2
     estimators = [name.strip() for name in args.estimators.split(",") if name.strip()]
     try:
         plan = plan_replay(args.log, estimators, fmu_paths, args.paper_tuning,

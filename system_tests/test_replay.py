@@ -182,6 +182,8 @@ def test_altfusion_replay_refuses_a_missing_log_or_an_unknown_estimator(fmus, tm
     log = LOG_DIR / LOGS["replay_px4_sitl"].file
     assert main(["replay", str(log), "--models", str(MODELS), "--estimators", "NoSuchKF"]) == 2
     assert "no FMU for NoSuchKF" in capsys.readouterr().err
+    assert main(["replay", str(log), "--models", str(tmp_path)]) == 2   # run elsewhere
+    assert f"error: no FMU in {tmp_path} (build them" in capsys.readouterr().err
 
 
 def test_a_log_file_that_is_not_there_fails_initialization_naming_log_file(fmus):
