@@ -90,6 +90,9 @@ def cases(plant: Path, tmp: Path) -> dict[str, tuple[list[str], str]]:
                                    str(tmp / "mc")], "--stop 1e+308: recording 1.00e309 rows"),
         "mc stop NaN": (["mc", str(plant), "-n", "1", "--stop", "nan", "--out",
                          str(tmp / "mc")], "--stop nan: must be finite"),
+        "mc stop zero": (["mc", str(plant), "-n", "1", "--stop", "0", "--out",
+                          str(tmp / "mc")], "--stop 0: must be after the start time (0 s): a "
+                                            "run of no duration has only its initial values"),
         "mc no runs": (["mc", str(plant), "-n", "0", "--out", str(tmp / "mc")],
                        "-n 0: the number of runs must be >= 1"),
         "mc negative seed": (["mc", str(plant), "-n", "1", "--seed", "-1", "--out",

@@ -54,11 +54,15 @@ def plan(source: SystemSource, master_seed: int = 0, stop_time: float | None = N
         raise CampaignError(f"{', '.join(clashes)}: seeds are derived per run from the master "
                             f"seed (--seed); they cannot be set")
     stop = prepared.spec.stop_time if stop_time is None else float(stop_time)
+    given = f"--stop {stop:g}" if stop_time is not None else f"stop time {stop:g} s"
     try:
         recording_size(prepared.spec, stop, recorded_columns(prepared.spec, prepared.fmu_paths))
     except ParameterError as error:
-        given = f"--stop {stop:g}" if stop_time is not None else f"stop time {stop:g} s"
         raise CampaignError(f"{given}: {error.reason}") from None
+    if stop <= prepared.spec.start_time:
+        raise CampaignError(f"{given}: must be after the start time "
+                            f"({prepared.spec.start_time:g} s): a run of no duration has only "
+                            f"its initial values, no statistics")
     task = CampaignTask(source, master_seed, stop, tuple(sorted(parameters.items())), seeded)
     return task, prepared
 
