@@ -135,3 +135,11 @@ def test_a_damaged_manifest_is_refused_naming_the_file(tmp_path, text, reason):
     message = str(error.value)
     assert message.startswith(f"{tmp_path / MANIFEST}: not a campaign manifest")
     assert reason in message
+
+
+def test_a_folder_without_a_manifest_is_not_a_campaign(tmp_path):
+    """``altfusion report`` of a folder that holds no campaign said "[Errno 2] No such file
+    or directory: '.../manifest.json'"."""
+    with pytest.raises(DamagedManifestError, match=r"not a campaign folder \(no manifest.json: "
+                                                   r"altfusion mc or compare writes one\)"):
+        read_manifest(tmp_path)

@@ -172,8 +172,8 @@ MANIFEST_FIELDS = {"format": int, "system": dict, "ssp": str, "ssp_sha256": str,
 
 
 class DamagedManifestError(ValueError):
-    """A ``manifest.json`` that is not a campaign's manifest (unreadable, not JSON, a field
-    missing or of another type)."""
+    """A ``manifest.json`` that is not a campaign's manifest (missing, unreadable, not JSON, a
+    field missing or of another type)."""
 
 
 def read_manifest(out: Path) -> dict[str, Any]:
@@ -183,6 +183,9 @@ def read_manifest(out: Path) -> dict[str, Any]:
     path = Path(out) / MANIFEST
     try:
         manifest = json.loads(path.read_bytes())
+    except FileNotFoundError:
+        raise DamagedManifestError(f"{out}: not a campaign folder (no {MANIFEST}: altfusion mc "
+                                   f"or compare writes one)") from None
     except (UnicodeDecodeError, json.JSONDecodeError) as error:
         raise DamagedManifestError(f"{path}: not a campaign manifest ({error})") from None
     if not isinstance(manifest, dict):
