@@ -8,6 +8,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import IO, Any
 
+from altfusion.errors import UsageError
+
 
 def atomic_write(path: Path, write: Callable[[IO[bytes]], None]) -> Path:
     """Write ``path`` through ``write(handle)`` to a temporary file, then rename it into place."""
@@ -38,3 +40,19 @@ def save_figure(fig: Any, path: Path, **options: Any) -> Path:
     path = Path(path)
     return atomic_write(path, lambda handle: fig.savefig(handle, format=path.suffix[1:],
                                                          **options))
+
+
+def output_folder(out: str | Path, option: str = "--out") -> Path:
+    """The output folder ``out`` created and checked writable before any work (a run's
+    results are not lost to a folder that cannot take them), or a UsageError naming it as
+    the command-line ``option``."""
+    folder = Path(out)
+    if folder.exists() and not folder.is_dir():
+        raise UsageError(f"{option} {out}: a file, not a folder")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise UsageError(f"{option} {out}: cannot create the folder ({error.strerror})") from error
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise UsageError(f"{option} {out}: folder not writable")
+    return folder

@@ -2,13 +2,13 @@
 
 import argparse
 import math
-import os
 import signal
 import sys
 from dataclasses import replace
 from pathlib import Path
 from typing import NoReturn
 
+from altfusion.atomic import output_folder
 from altfusion.cosim.instances import CosimError
 from altfusion.cosim.runner import RunFailedError, RunInterruptedError, Simulation
 from altfusion.cosim.settings import parse_settings
@@ -26,18 +26,6 @@ way."""
 
 INTERRUPTED = 130
 """Exit status after Ctrl-C (128 + SIGINT), as ``altfusion mc``'s."""
-
-
-def output_folder(out: str | Path) -> Path:
-    """``out`` created and checked writable before any work, or a UsageError naming it."""
-    folder = Path(out)
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError as error:
-        raise UsageError(f"--out {out}: cannot create the folder ({error.strerror})") from error
-    if not os.access(folder, os.W_OK | os.X_OK):
-        raise UsageError(f"--out {out}: folder not writable")
-    return folder
 
 
 def command_run(args: argparse.Namespace) -> int:
@@ -141,6 +129,7 @@ def command_replay(args: argparse.Namespace) -> int:
     from altfusion.replay.run import plan_replay, run_replay
     from altfusion.replay.ulog import LogReadError
 
+    out = output_folder(args.out)
     fmu_paths = {path.stem: path for path in Path(args.models).glob("*.fmu")}
     if not fmu_paths:
         print(f"error: no FMU in {args.models} (build them: python build_fmu.py, or give "
@@ -151,7 +140,7 @@ def command_replay(args: argparse.Namespace) -> int:
         plan = plan_replay(args.log, estimators, fmu_paths, args.paper_tuning,
                            args.time_offset)
         settings = parse_settings(LoadedSystem(plan.spec, fmu_paths), args.set)
-        replay = run_replay(plan, fmu_paths, Path(args.out), settings)
+        replay = run_replay(plan, fmu_paths, out, settings)
     except LogReadError as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
@@ -176,7 +165,7 @@ def command_replay(args: argparse.Namespace) -> int:
           f"epv²; h-range = implied ground height, flat ground.\n")
     print(format_table(replay.reports))
     events = health_events(replay.results)
-    files = [*replay.files, write_events(events, Path(args.out) / f"{replay.spec.name}"
+    files = [*replay.files, write_events(events, out / f"{replay.spec.name}"
                                                                    f".events.csv")]
     print(f"\n{format_events(events, str(files[-1]))}")
     print(f"\nwrote {', '.join(str(f) for f in files)}")
@@ -193,7 +182,7 @@ def command_controller_design(args: argparse.Namespace) -> int:
 def command_reproduce(args: argparse.Namespace) -> int:
     from altfusion.reproduce import ReproduceOptions, reproduction
 
-    options = ReproduceOptions(out=Path(args.out or f"results/reproduce_{args.name}"),
+    options = ReproduceOptions(out=output_folder(args.out or f"results/reproduce_{args.name}"),
                                runs=args.runs, workers=args.workers, scheduler=args.scheduler,
                                master_seed=args.seed, resume=args.resume, models=args.models,
                                paper_algorithm=args.paper_algorithm, backend=args.backend)

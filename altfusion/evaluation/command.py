@@ -4,6 +4,7 @@ HTML page and markdown (``docs/evaluation.md`` with ``--docs``)."""
 import argparse
 from pathlib import Path
 
+from altfusion.atomic import output_folder
 from altfusion.errors import UsageError
 from altfusion.evaluation.told import MISSTATED_FACTORS, MODELS, TOLD_MODES
 from altfusion.montecarlo.commands import guarded
@@ -90,7 +91,7 @@ def command_evaluate(args: argparse.Namespace) -> int:
 
     if args.runs is not None and args.runs < 1:
         raise UsageError(f"--runs {args.runs}: expected at least 1 run per scenario")
-    out = Path(args.out)
+    out = output_folder(args.out)
     stored = stored_settings(out) if args.resume else {}
     told = choose_told(_names(args.told) if args.told is not None
                        else stored.get("told") or [MODELS])

@@ -5,6 +5,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from altfusion.atomic import output_folder
 from altfusion.montecarlo.source import CampaignError
 from altfusion.montecarlo.swap import SwapError
 
@@ -67,7 +68,7 @@ def command_mc(args: argparse.Namespace) -> int:
     from altfusion.montecarlo.source import SystemSource
     from altfusion.montecarlo.tables import format_statistics
 
-    out = Path(args.out or Path("results") / "mc" / args.system.stem)
+    out = output_folder(args.out or Path("results") / "mc" / args.system.stem)
     source = SystemSource.from_path(args.system, fault=args.fault)
     if args.run is not None:
         return _rerun(args, source, out)
@@ -121,7 +122,7 @@ def command_compare(args: argparse.Namespace) -> int:
     )
 
     estimators = [name.strip() for name in args.estimators.split(",") if name.strip()]
-    out = Path(args.out or Path("results") / "compare" / args.system.stem)
+    out = output_folder(args.out or Path("results") / "compare" / args.system.stem)
     outcomes = run_comparison(args.system, estimators, out, _settings(args), _execution(args),
                               resume=args.resume)
     status = 0
