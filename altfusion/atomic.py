@@ -43,16 +43,23 @@ def save_figure(fig: Any, path: Path, **options: Any) -> Path:
 
 
 def output_folder(out: str | Path, option: str = "--out") -> Path:
-    """The output folder ``out`` created and checked writable before any work (a run's
-    results are not lost to a folder that cannot take them), or a UsageError naming it as
-    the command-line ``option``."""
+    """The output folder ``out``, checked before any work (a run's results are not lost to a
+    folder that cannot take them) without creating it (a refused command leaves nothing
+    behind; the first result written creates it), or a UsageError naming it as the
+    command-line ``option``. The check creates and removes a folder where ``out`` would
+    start (permission bits do not tell, e.g. for root or on a read-only file system)."""
     folder = Path(out)
     if folder.exists() and not folder.is_dir():
         raise UsageError(f"{option} {out}: a file, not a folder")
+    existing = folder.absolute()
+    while not existing.exists():
+        existing = existing.parent
+    if not existing.is_dir():
+        raise UsageError(f"{option} {out}: cannot create the folder ({existing} is a file)")
     try:
-        folder.mkdir(parents=True, exist_ok=True)
+        os.rmdir(tempfile.mkdtemp(dir=existing, prefix=".altfusion-check-"))
     except OSError as error:
-        raise UsageError(f"{option} {out}: cannot create the folder ({error.strerror})") from error
-    if not os.access(folder, os.W_OK | os.X_OK):
-        raise UsageError(f"{option} {out}: folder not writable")
+        what = "folder not writable" if existing == folder.absolute() else \
+            f"cannot create the folder ({existing}: {error.strerror})"
+        raise UsageError(f"{option} {out}: {what}") from None
     return folder

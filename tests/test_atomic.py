@@ -4,8 +4,9 @@ name and no temporary file."""
 import numpy as np
 import pytest
 
-from altfusion.atomic import save_figure, write_text
+from altfusion.atomic import output_folder, save_figure, write_text
 from altfusion.cosim.results import Results
+from altfusion.errors import UsageError
 
 
 class FailingFigure:
@@ -43,3 +44,18 @@ def test_a_csv_round_trips(tmp_path):
     assert np.array_equal(back.time, results.time) and np.array_equal(back["a.x"],
                                                                        results["a.x"])
     assert back.units == {"a.x": "m"}
+
+
+def test_an_output_folder_is_checked_without_being_made(tmp_path):
+    """A folder that can be made is accepted and not made (a refused command leaves nothing
+    behind; the first result written makes it), and nothing of the check stays; a file, or a
+    folder under a file, is refused naming the option."""
+    assert output_folder(tmp_path / "a" / "b") == tmp_path / "a" / "b"
+    assert list(tmp_path.iterdir()) == []
+    (tmp_path / "f").write_text("")
+    with pytest.raises(UsageError, match=r"^--out .*/f: a file, not a folder$"):
+        output_folder(tmp_path / "f")
+    with pytest.raises(UsageError, match=r"^--docs .*/f/x: cannot create the folder \(.*/f is a "
+                                         r"file\)$"):
+        output_folder(tmp_path / "f" / "x", "--docs")
+    assert output_folder(tmp_path) == tmp_path and [p.name for p in tmp_path.iterdir()] == ["f"]
