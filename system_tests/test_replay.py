@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from pyulog import ULog
-from ulog_mutation import shift_stamp, without_topic
+from ulog_mutation import shift_stamp, unknown_message_id, without_topic
 
 from altfusion.cli import main
 from altfusion.cosim import CosimError, read_ssp
@@ -216,6 +216,24 @@ def test_a_corrupted_gps_stamp_is_dropped_and_the_replay_keeps_the_logs_span(
     assert status == 0, err
     assert f"replayed to {LOGS['replay_px4_sitl'].stop_time:g} s" in out
     assert "vehicle_gps_position: bad time stamp: 1 sample(s)" in out
+
+
+def test_the_readers_warnings_are_in_the_log_report_not_on_standard_output(
+        fmus, tmp_path, capsys):
+    """pyulog reports a damaged log with print(): two GPS samples bound to a message id no
+    topic declares printed "Warning: no subscription found..." (once per id) among the
+    replay's output (inside an FMU: on the host's standard output); it is a line of the log
+    report, and the replay goes on without those samples."""
+    log = tmp_path / "unknown_id.ulg"
+    unknown_message_id(LOG_DIR / LOGS["replay_px4_sitl"].file, log, "vehicle_gps_position",
+                       100, 60000)
+    unknown_message_id(log, log, "vehicle_gps_position", 200, 60000)
+    status, out, err = replay_cli(log, tmp_path, capsys)
+    assert status == 0, err
+    assert not [line for line in out.splitlines() if line.startswith("Warning")]
+    assert ("  log: file: damaged: pyulog: Warning: no subscription found for message id 60000."
+            " Continuing, but file is most likely corrupt\n") in out
+    assert "samples delivered: baro 623 of 623, gps 581 of 581" in out
 
 
 def test_a_log_without_baro_gives_the_table_and_the_plot(fmus, tmp_path, capsys):

@@ -50,3 +50,12 @@ def without_topic(source: Path, target: Path, topic: str) -> None:
     kept = [data[:HEADER]] + [data[start - 3:start + size] for start, size, _kind
                               in messages(data) if start not in dropped]
     target.write_bytes(b"".join(kept))
+
+
+def unknown_message_id(source: Path, target: Path, topic: str, index: int, msg_id: int) -> None:
+    """Copy ``source`` with data message ``index`` of ``topic`` bound to ``msg_id``, an id no
+    ``A`` message declares (pyulog prints a warning and skips it)."""
+    data = bytearray(source.read_bytes())
+    start, _size = data_offsets(bytes(data), topic)[index]
+    struct.pack_into("<H", data, start, msg_id)
+    target.write_bytes(bytes(data))

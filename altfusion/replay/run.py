@@ -86,9 +86,10 @@ def plan_replay(log_file: Path, estimators: list[str], fmu_paths: dict[str, Path
             if p.topic not in (LOCAL_POSITION, ATTITUDE) and p.kind in DAMAGE))[:4])
         counts = ", ".join(f"{s.topic} {len(s)}" for s in log.streams.values()
                            if s.prefix != EKF_PREFIX) or "none"
+        reader = next((f"; {p.message}" for p in log.problems if p.kind == "damaged"), "")
         raise LogReadError(f"{log_file}: the sensor data span {log.duration:g} s, less than "
                            f"one replay step ({BASE_STEP:g} s): the sensor section is missing or "
-                           f"damaged (samples: {counts}{'; ' + found if found else ''})")
+                           f"damaged (samples: {counts}{'; ' + found if found else ''}{reader})")
     if time_offset >= log.duration:
         raise UsageError(f"time offset {time_offset:g} s: at or beyond the end of the log's "
                          f"sensor data ({log.duration:g} s)")

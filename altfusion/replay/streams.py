@@ -19,7 +19,7 @@ GAP_FACTOR = 5.0
 class LogProblem:
     """One finding about a log: ``kind`` is one of 'missing topic', 'non-monotonic',
     'duplicate', 'gap', 'non-finite', 'invalid', 'unit', 'time stamp', 'approximation',
-    'not measured', 'skipped'."""
+    'not measured', 'skipped', 'damaged' (the reader's own warnings)."""
 
     topic: str
     kind: str

@@ -5,6 +5,9 @@ several instances (``multi_id``) the first is used and the others are reported. 
 relative to the log's first time stamp (or an earlier sample time, see ``extract_streams``).
 """
 
+import contextlib
+import io
+from collections import Counter
 from pathlib import Path
 
 import numpy as np
@@ -29,13 +32,15 @@ def read_topics(path: Path) -> tuple[dict[str, dict[str, np.ndarray]], int, int,
     path = Path(path)
     if not path.is_file():
         raise LogReadError(f"{path}: no such file")
+    printed = io.StringIO()
     try:
-        ulog = ULog(str(path))
+        with contextlib.redirect_stdout(printed):   # pyulog reports damage with print()
+            ulog = ULog(str(path))
     except Exception as error:  # pyulog raises bare exceptions on corrupt files
         raise LogReadError(f"{path}: not a readable ULog file ({type(error).__name__}: "
                            f"{error})") from None
     topics: dict[str, dict[str, np.ndarray]] = {}
-    problems = []
+    problems = reader_warnings(printed.getvalue())
     for data in sorted(ulog.data_list, key=lambda d: d.multi_id):
         if data.name not in TOPICS:
             continue
@@ -48,6 +53,25 @@ def read_topics(path: Path) -> tuple[dict[str, dict[str, np.ndarray]], int, int,
         if message.log_level <= 3:  # emergency, alert, critical, error
             problems.append(LogProblem("logged message", "error", message.message))
     return topics, int(ulog.start_timestamp), int(ulog.last_timestamp), problems
+
+
+SHOWN_WARNINGS = 3
+"""Distinct reader warnings reported one by one; the others are counted."""
+
+
+def reader_warnings(printed: str) -> list[LogProblem]:
+    """What pyulog printed while reading (it reports a damaged file with ``print``: "no
+    subscription found for message id 11...", "File corruption detected..."), as log
+    problems instead of lines on the host's standard output: the first
+    :data:`SHOWN_WARNINGS` distinct ones with their counts, then how many more."""
+    counts = Counter(line.strip() for line in printed.splitlines() if line.strip())
+    problems = [LogProblem("file", "damaged", f"pyulog: {line}"
+                           + (f" ({count} times)" if count > 1 else ""))
+                for line, count in list(counts.items())[:SHOWN_WARNINGS]]
+    others = sum(list(counts.values())[SHOWN_WARNINGS:])
+    if others:
+        problems.append(LogProblem("file", "damaged", f"pyulog: {others} more warning(s)"))
+    return problems
 
 
 SECONDS_PER_BYTE = 1e-3
