@@ -136,6 +136,9 @@ def command_replay(args: argparse.Namespace) -> int:
               f"their folder with --models)", file=sys.stderr)
         return 2
     estimators = [name.strip() for name in args.estimators.split(",") if name.strip()]
+    if not estimators:
+        raise UsageError(f"--estimators {args.estimators!r}: names no estimator (FMU model "
+                         f"names, comma-separated)")
     try:
         plan = plan_replay(args.log, estimators, fmu_paths, args.paper_tuning,
                            args.time_offset)

@@ -106,6 +106,11 @@ def cases(plant: Path, tmp: Path) -> dict[str, tuple[list[str], str]]:
                               str(tmp / "mc")], "--seed -1: the master seed must be >= 0"),
         "a folder": (["run", str(plant.parent)], "a folder; expected an SSP archive (a .ssp "
                                                  "file), such as"),
+        "replay no estimator": (["replay", str(LOG), "--models", str(plant.parent),
+                                 "--estimators", ","], "--estimators ',': names no estimator"),
+        "evaluate no estimator": (["evaluate", "--estimators", ",", "--models",
+                                   str(plant.parent), "--out", str(tmp / "ev")],
+                                  "--estimators names no estimator"),
         "evaluate no runs": (["evaluate", "--runs", "0", "--models", str(plant.parent), "--out",
                               str(tmp / "ev")], "--runs 0: expected at least 1 run"),
         "evaluate unknown told mode": (["evaluate", "--told", "models,datasheet", "--models",
@@ -171,7 +176,8 @@ CASE_NAMES = [
     "no SSP for mc", "unknown fault", "fault without its sensor", "unknown fault for mc",
     "stop beyond memory", "stop beyond any array", "mc stop beyond memory", "mc stop NaN",
     "mc stop zero", "mc no runs", "mc negative seed",
-    "a folder", "evaluate no runs", "evaluate unknown told mode", "evaluate told mode twice",
+    "a folder", "replay no estimator", "evaluate no estimator", "evaluate no runs",
+    "evaluate unknown told mode", "evaluate told mode twice",
     "plant mass", "no sensor data", "damaged sensor data",
 ]
 

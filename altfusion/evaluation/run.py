@@ -84,7 +84,9 @@ def _choose(option: str, noun: str, given: list[str] | None, known: list[str]) -
     if unknown:
         raise EvaluationError(f"unknown {noun}s {', '.join(unknown)}; known: "
                               f"{', '.join(known)}")
-    if len(set(given)) != len(given) or not given:
+    if not given:
+        raise EvaluationError(f"--{option} names no {noun}")
+    if len(set(given)) != len(given):
         raise EvaluationError(f"--{option} must name each {noun} once")
     return list(given)
 
