@@ -437,3 +437,23 @@ def test_noise_adaptation_is_bounded_and_weights_a_noisy_source_down():
         rms[adaptive] = float(np.sqrt(np.mean([(r[1] - TRUE_H) ** 2 for r in rows])))
         assert flight.ekf._adaptation("baro") <= 100.0
     assert rms[True] < 0.7 * rms[False]
+
+
+def test_a_datum_move_leaves_the_offsets_no_sample_has_set():
+    """Told nothing, as a replayed PX4 log starts (the Auterion log: lidar, then GNSS 423 m
+    higher, then a baro below the GNSS): the GNSS's first sample moves the datum onto it,
+    and the baro's offset d, still its prior (0: relative to the GNSS datum), stays there
+    instead of moving by -420 m with the height. The baro's first sample then sets d
+    (-190 m) and the baro is fused. Before, d moved to -420 m; the first sample, 230 m from
+    that, passed the first-sample check (which adds the variances of h and d, about 1000 m²
+    each while the noises are unstated and start pessimistic, and misses their correlation)
+    and was gated against the prediction h + d, whose variance the correlation makes small:
+    it was rejected, and so was every later one (1500 in these 30 s; 102 of 110 on the
+    log)."""
+    flight = Flight(baro_noise=0.0, gps_noise=0.0, gps_vz_noise=0.0, laser_noise=0.0)
+    flight.fly(2.0, baro=None, gps=None, laser=0.0)
+    flight.fly(0.1, baro=None, gps=420.0, laser=0.0)     # one GNSS sample, at its end
+    flight.fly(30.0, baro=230.0, gps=420.0, laser=0.0)
+    assert flight.ekf.baro_rejected == 0 and not flight.isolated("baro")
+    assert abs(flight.ekf.baro_bias - (-190.0)) < 1.0
+    assert abs(flight.ekf.h_est - 430.0) < 1.0

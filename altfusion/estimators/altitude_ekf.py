@@ -761,9 +761,10 @@ class AltitudeEKF(Estimator):
 
     def _first_reference(self, z: float, R: float) -> bool:
         """The reference's first sample (of variance R) after a start from another source sets
-        the datum: if it disagrees with the height (beyond the gate), h moves onto it and d
-        and t move with it, so that the other sources' predictions stay where they were (a
-        lidar at 0 m, then GNSS at 429 m MSL: the terrain becomes 429 m - range). The height's
+        the datum: if it disagrees with the height (beyond the gate), h moves onto it and the
+        offsets a sample has set (d, g, t) move with it, so that those sources' predictions
+        stay where they were (a lidar at 0 m, then GNSS at 429 m MSL: the terrain becomes
+        429 m - range); an offset still at its prior stays (:meth:`_unset_offsets`). The height's
         error is then the sample's (variance R, its old error forgotten) and the moved
         states keep their errors relative to it (:func:`~altfusion.estimators.kalman.
         move_datum`); the sample is consumed. One that agrees is fused as any sample. True
@@ -775,6 +776,8 @@ class AltitudeEKF(Estimator):
         if y * y <= self.params.gate_sigma**2 * S:
             return False
         direction = self._datum_direction()
+        for index in self._unset_offsets():
+            direction[index] = 0.0
         self.x = [xi + ui * y for xi, ui in zip(self.x, direction, strict=True)]
         move_datum(self.P, H, direction, R)
         self.note(f"{self._reference}: first sample of the height reference {y:.4g} m from "
@@ -793,6 +796,18 @@ class AltitudeEKF(Estimator):
             if offset is not None:
                 direction[offset] = -1.0
         return direction
+
+    def _unset_offsets(self) -> list[int]:
+        """The offset states (d, g, t) no sample has set yet: each still its prior, which is
+        relative to the reference's datum (``terrain_h``, an offset of 0), so a move of the
+        datum leaves it (measured on the Auterion log told nothing: started on the lidar,
+        the GNSS moved the datum by 423 m and took the baro's unset d along, so that the
+        baro's first sample, 269 m from that prediction, was rejected, and so was every
+        later one)."""
+        unset = [] if self._terrain_known else [T]
+        return unset + [index for source in ("baro", "gps")
+                        if (index := self._offset_index(source)) in (D, G)
+                        and not self._offset_known[source]]
 
     def _datum_follows_noise(self) -> None:
         """The reference's noise check raised its factor above its earlier peak by r: the
