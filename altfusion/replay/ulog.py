@@ -31,7 +31,9 @@ def read_topics(path: Path) -> tuple[dict[str, dict[str, np.ndarray]], int, int,
 
     path = Path(path)
     if not path.is_file():
-        raise LogReadError(f"{path}: no such file")
+        raise LogReadError(f"{path}: " + ("a folder, not a ULog file" if path.is_dir() else
+                                          "not a regular file" if path.exists() else
+                                          "no such file"))
     printed = io.StringIO()
     try:
         with contextlib.redirect_stdout(printed):   # pyulog reports damage with print()
