@@ -53,6 +53,17 @@ def test_a_stream_on_its_schedule_passes_with_every_sample_counted():
     assert result.consumers[0].latency.high == 0.0
 
 
+def test_a_run_of_no_duration_has_nothing_due_and_nothing_wrong():
+    """One row (``altfusion timing SYSTEM.ssp --stop 0``: the run's initial values) failed
+    with "zip() argument 2 is shorter than argument 1"; no sample is due, none is seen."""
+    s = stream()
+    zero = np.zeros(1)
+    result = check_stream(s, zero, {s.count_column: zero, s.time_column: zero,
+                                    "estimator.gps_count": zero})
+    assert result.ok, result.violations
+    assert (result.expected, result.seen, result.gaps) == (0, 0, 0)
+
+
 def test_a_consumer_one_step_behind_passes_with_that_latency_and_two_steps_fail():
     s = stream()
     one = check_stream(s, *recorded(s, seen_after_rows=1))

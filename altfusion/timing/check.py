@@ -191,7 +191,7 @@ def _samples(result: StreamResult, schedule: Schedule, time: np.ndarray, count: 
     if errors.size:
         result.stamp_error = float(np.abs(errors).max())
         result.jitter = float(np.abs(np.diff(errors)).max()) if errors.size > 1 else 0.0
-    previous = np.r_[schedule.first_index() - 1, nearest[:-1]]
+    previous = np.r_[schedule.first_index() - 1, nearest[:-1]][:nearest.size]
     taken = rise[rows - 1].astype(np.int64)
     spanned = nearest - previous
     twice = taken > spanned
