@@ -132,9 +132,8 @@ def command_replay(args: argparse.Namespace) -> int:
     out = output_folder(args.out)
     fmu_paths = {path.stem: path for path in Path(args.models).glob("*.fmu")}
     if not fmu_paths:
-        print(f"error: no FMU in {args.models} (build them: python build_fmu.py, or give "
-              f"their folder with --models)", file=sys.stderr)
-        return 2
+        raise UsageError(f"no FMU in {args.models} (build them: python build_fmu.py, or give "
+                         f"their folder with --models)")
     estimators = [name.strip() for name in args.estimators.split(",") if name.strip()]
     if not estimators:
         raise UsageError(f"--estimators {args.estimators!r}: names no estimator (FMU model "

@@ -37,14 +37,14 @@ def test_a_receiver_is_still_while_its_heights_show_no_slope_beyond_the_gate():
     for climb, still in ((0.0, True), (1.0, True), (10.0, False)):
         receiver = StillReceiver()
         for k in range(10):
-            receiver.add(1000.0 + k, 100.0 + climb * k)
+            receiver.sample(1000.0 + k, 100.0 + climb * k, 0.0)
         assert receiver.still(13.0, 5.0) is still, climb
     receiver = StillReceiver()
-    receiver.add(5.0, 100.0)
+    receiver.sample(5.0, 100.0, 0.0)
     assert not receiver.still(13.0, 5.0)
-    receiver.add(6.0, 100.0)
+    receiver.sample(6.0, 100.0, 0.0)
     assert receiver.still(13.0, 5.0)
-    receiver.restart()
+    receiver.sample(7.0, 100.0, 0.01)                # the speed reads other than 0
     assert receiver.n == 0 and not receiver.still(13.0, 5.0)
 
 

@@ -377,10 +377,7 @@ class AltitudeEKF(Estimator):
         gps = samples.get(GPS_ALL)
         if gps is not None:
             instant = gps["gps_time"] - self.params.gps_delay
-            if gps["gps_vz"] == 0.0:
-                self.gnss_still.add(instant, gps["gps_h"])
-            elif self.gnss_still.n:
-                self.gnss_still.restart()
+            self.gnss_still.sample(instant, gps["gps_h"], gps["gps_vz"])
             at_rest = partial(self._gnss_at_rest, gps)
             if not self._stuck("gps", gps["gps_h"], at_rest):
                 self._fuse_height("gps", gps["gps_h"], instant, self._gps_sigma(gps))
@@ -442,7 +439,7 @@ class AltitudeEKF(Estimator):
         show no slope beyond the gate, judged with the GNSS height noise of this
         ``sample``. Never without a gate."""
         gate = self.params.gate_sigma
-        if sample["gps_vz"] != 0.0 or gate <= 0.0:
+        if gate <= 0.0:
             return False
         sigma = math.sqrt(self._noise_variance("gps", self._gps_sigma(sample)))
         return self.gnss_still.still(sigma, gate)
@@ -764,7 +761,7 @@ class AltitudeEKF(Estimator):
         the datum: if it disagrees with the height (beyond the gate), h moves onto it and the
         offsets a sample has set (d, g, t) move with it, so that those sources' predictions
         stay where they were (a lidar at 0 m, then GNSS at 429 m MSL: the terrain becomes
-        429 m - range); an offset still at its prior stays (:meth:`_unset_offsets`). The height's
+        429 m - range); an offset still at its prior stays (:meth:`_datum_direction`). The height's
         error is then the sample's (variance R, its old error forgotten) and the moved
         states keep their errors relative to it (:func:`~altfusion.estimators.kalman.
         move_datum`); the sample is consumed. One that agrees is fused as any sample. True
@@ -776,8 +773,6 @@ class AltitudeEKF(Estimator):
         if y * y <= self.params.gate_sigma**2 * S:
             return False
         direction = self._datum_direction()
-        for index in self._unset_offsets():
-            direction[index] = 0.0
         self.x = [xi + ui * y for xi, ui in zip(self.x, direction, strict=True)]
         move_datum(self.P, H, direction, R)
         self.note(f"{self._reference}: first sample of the height reference {y:.4g} m from "
@@ -788,26 +783,21 @@ class AltitudeEKF(Estimator):
     def _datum_direction(self) -> list[float]:
         """u: how the states move with the datum (h and t by +1, the offsets d and g of the
         sources other than the reference by -1): x + u·δ predicts every source's reading as x
-        does, but the reference's, which moves by δ."""
+        does, but the reference's, which moves by δ. An offset no sample has set yet stays
+        (0): its prior is relative to the reference's datum (``terrain_h``, an offset of 0),
+        and no reading of its source is there to keep. (Measured on the Auterion log told
+        nothing: started on the lidar, the GNSS moved the datum by 423 m and took the baro's
+        unset d along, so that the baro's first sample, 269 m from that prediction, was
+        rejected, and so was every later one.)"""
         direction = [0.0] * N
-        direction[H] = direction[T] = 1.0
+        direction[H] = 1.0
+        if self._terrain_known:
+            direction[T] = 1.0
         for source in ("baro", "gps"):
             offset = self._offset_index(source)
-            if offset is not None:
+            if offset is not None and self._offset_known[source]:
                 direction[offset] = -1.0
         return direction
-
-    def _unset_offsets(self) -> list[int]:
-        """The offset states (d, g, t) no sample has set yet: each still its prior, which is
-        relative to the reference's datum (``terrain_h``, an offset of 0), so a move of the
-        datum leaves it (measured on the Auterion log told nothing: started on the lidar,
-        the GNSS moved the datum by 423 m and took the baro's unset d along, so that the
-        baro's first sample, 269 m from that prediction, was rejected, and so was every
-        later one)."""
-        unset = [] if self._terrain_known else [T]
-        return unset + [index for source in ("baro", "gps")
-                        if (index := self._offset_index(source)) in (D, G)
-                        and not self._offset_known[source]]
 
     def _datum_follows_noise(self) -> None:
         """The reference's noise check raised its factor above its earlier peak by r: the

@@ -67,9 +67,14 @@ class StillReceiver:
         self.n = 0
         self.sum_t = self.sum_tt = self.sum_h = self.sum_th = 0.0
 
-    def add(self, t: float, h: float) -> None:
-        """A sample of the run: height ``h`` at time ``t`` (s, relative to the run's first
-        sample, so that the sums do not cancel)."""
+    def sample(self, t: float, h: float, vz: float) -> None:
+        """A GNSS sample of time ``t``, height ``h`` and vertical speed ``vz``: the run goes
+        on while ``vz`` reads exactly 0 and restarts when it does not. Times are taken from
+        the run's first sample, so that the sums do not cancel."""
+        if vz != 0.0:
+            if self.n:
+                self.restart()
+            return
         if self.n == 0:
             self.t0 = t
         t -= self.t0
@@ -81,7 +86,8 @@ class StillReceiver:
 
     def still(self, sigma: float, gate: float) -> bool:
         """The heights' slope b over the run and its variance σ²·n/D (σ the heights' noise,
-        D = nΣt² - (Σt)²): True if b² ≤ gate²·Var b; False with fewer than two instants."""
+        D = nΣt² - (Σt)²): True if b² ≤ gate²·Var b; False with fewer than two instants
+        (so also while the speed does not read 0)."""
         n = self.n
         spread = n * self.sum_tt - self.sum_t * self.sum_t
         if n < 2 or spread <= 0.0:
