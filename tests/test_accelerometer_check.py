@@ -134,6 +134,29 @@ def test_the_scatter_leaves_an_accelerometer_as_told_and_its_manoeuvres_alone():
     assert acc.scatter == pytest.approx(0.05, rel=0.25)
 
 
+def test_a_noise_not_stated_is_raised_by_the_scatter_of_the_first_samples():
+    """Not stated (starting at the typical 0.35 m/s²), a logged multicopter's accelerometer
+    scattering 7 m/s²: from EARLY_SAMPLES = 10 second differences on (1.4 s at 8.6 Hz, where
+    100 take 11.6 s) its noise is the scatter's, within the estimate's 99.9 % band over 10
+    differences (0.21-2.7x, simulated); and stays so. An accelerometer quieter than typical
+    (0.2 m/s²) stays at the starting value until 100 differences are in: the early scatter
+    only raises."""
+    rng = np.random.default_rng(5)
+    acc = AccelerometerCheck(0.35, (), stated=False)
+    for k, value in enumerate(7.0 * rng.standard_normal(40)):
+        acc.sample(float(value))
+        acc.step((k + 1) / 8.6)
+        if k + 1 < check.EARLY_SAMPLES + 2:         # two samples before the first difference
+            assert acc.noise == 0.35, k
+        else:
+            assert 0.21 * 7.0 <= acc.noise <= 2.7 * 7.0 and acc.stated == acc.noise, k
+    quiet = AccelerometerCheck(0.35, (), stated=False)
+    for k, value in enumerate(0.2 * rng.standard_normal(check.SCATTER_SAMPLES + 1)):
+        quiet.sample(float(value))
+        quiet.step((k + 1) * DT)
+        assert quiet.noise == 0.35, k
+
+
 def hover(acc_std: float, seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """AltitudeEKF told an accelerometer of 0.05 m/s² hovering 130 s on one of ``acc_std``
     (baro every step, GNSS at 10 Hz: tests/test_altitude_ekf.py's sensors); per step of the
