@@ -31,7 +31,8 @@ instant s ≤ now, its time stamp less the sensor's delay (``baro_delay``, ``gps
 ``range_delay``; 0 by default): the state is taken back by δ = now - s along the model,
 h(s) = h - δ·v + δ²/2·a and v(s) = v - δ·a, and the Jacobian row follows (H F(δ)⁻¹):
 
-    baro:  z = h(s) + d + k·(h(s) - h_c)    (h_c: height at start; d = k = 0: height_ref baro)
+    baro:  z = h(s) + d + k·(h(s) - h_c)    (h_c: height at start; d = k = 0: height_ref baro;
+           k held while no other height source measures the height: ``_scale_observed``)
     GNSS height:  z = h(s) + g    (g = 0: height_ref gps),
                   σ = gps_noise·(VDOP/gps_vdop_ref)·√max(1, gps_nsat_ref/N)  (bao2017)
     GNSS vertical speed:  z = v(s);   radar, laser:  z = h(s) - t
@@ -531,11 +532,27 @@ class AltitudeEKF(Estimator):
             return h_s - x[T], [*row_h, (T, -1.0)]
         if source == "baro" and ref != "baro":
             scale = 1.0 + x[K]
-            return (h_s + x[D] + x[K] * (h_s - self.h_c),
-                    [*((i, scale * c) for i, c in row_h), (D, 1.0), (K, h_s - self.h_c)])
+            row = [*((i, scale * c) for i, c in row_h), (D, 1.0)]
+            if self._scale_observed():
+                row.append((K, h_s - self.h_c))
+            return h_s + x[D] + x[K] * (h_s - self.h_c), row
         if source == "gps" and ref != "gps":
             return h_s + x[G], [*row_h, (G, 1.0)]
         return h_s, list(row_h)
+
+    def _scale_observed(self) -> bool:
+        """Whether the baro's scale factor k is observed: while another height source (the
+        GNSS, a rangefinder) was fused within ``reset_timeout``, measuring the height's
+        changes the scale multiplies. Alone, the baro sees h + d + k·(h - h_c) and no
+        sample tells k from a height change: linearized at the estimate, the product k·h
+        still made k look observed, and h and d walked apart along the direction the baro
+        cannot see while P shrank (measured: a baro alone, told nothing, over a 10-55 m
+        flight: the height 128 m off at h_std 6.4 m within 12 s). So k is left out of the
+        baro's Jacobian row then (PX4 EKF2 estimates no baro bias while the baro is its
+        height reference, its fall-back without GNSS); its random walk goes on."""
+        now, window = self.time, self.params.reset_timeout
+        return any(now - source.last_fused <= window for source in self._heights
+                   if source.name != "baro")
 
     def _fuse_height(self, source: str, z: float, stamp: float, sigma: float) -> None:
         R = self._noise_variance(source, sigma)
