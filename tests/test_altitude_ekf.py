@@ -484,3 +484,30 @@ def test_a_baro_alone_keeps_its_scale_and_the_height_within_its_offset():
         errors, stds = np.array(errors), np.array(stds)
         assert ekf.h_valid and np.sqrt(np.mean(errors**2)) <= 3.5, seed
         assert np.all(np.abs(errors) <= 2.0 * stds), seed
+
+
+def test_without_a_datum_the_baro_scale_and_the_height_level_stay_unlearnt():
+    """Indoors, told nothing: a baro (3 m off, 1 m noise, 25 Hz) and a radio altimeter over
+    flat ground (0.5 m, 10 Hz), no GNSS (the height reference never comes), a flight between
+    1 and 19 m, 300 s, seeds 1-3. Nothing tells the height's level from the baro offset's and
+    the terrain's, nor the baro's scale from a height change: k is never updated (exactly 0)
+    and h_std stays the two priors' combination, √(1/(1/P0_offset + 1/P0_terrain)) = 7.07 m
+    (at least 7.0). With k updated against the radar the product k·(h - h_c) made the level
+    look observed: k 0.04-0.065, h_std 6.2-6.3 m, the level wandering by up to 4.6 m and the
+    error beyond h_std."""
+    for seed in range(1, 4):
+        rng = np.random.default_rng(seed)
+        ekf = core_estimator({})
+        feed = StreamFeeder(ekf)
+        for k in range(round(300.0 / STEP)):
+            t = (k + 1) * STEP
+            h = 10.0 + 8.0 * math.sin(2 * math.pi * t / 40.0) + math.sin(2 * math.pi * t / 7.0)
+            samples = {}
+            if k % 2 == 0:
+                samples["baro"] = {"baro_h": h + 3.0 + rng.standard_normal(), "baro_p": 1e5,
+                                   "baro_T": 288.0}
+            if k % 5 == 0:
+                samples["radar"] = {"radar_h": h + 0.5 * rng.standard_normal(),
+                                    "radar_valid": True}
+            feed.step(**samples)
+        assert ekf.baro_scale == 0.0 and ekf.h_std >= 7.0 and ekf.h_valid, seed

@@ -32,7 +32,8 @@ instant s ≤ now, its time stamp less the sensor's delay (``baro_delay``, ``gps
 h(s) = h - δ·v + δ²/2·a and v(s) = v - δ·a, and the Jacobian row follows (H F(δ)⁻¹):
 
     baro:  z = h(s) + d + k·(h(s) - h_c)    (h_c: height at start; d = k = 0: height_ref baro;
-           k held while no other height source measures the height: ``_scale_observed``)
+           k held before the datum is pinned or while no other height source measures
+           the height: ``_scale_observed``)
     GNSS height:  z = h(s) + g    (g = 0: height_ref gps),
                   σ = gps_noise·(VDOP/gps_vdop_ref)·√max(1, gps_nsat_ref/N)  (bao2017)
     GNSS vertical speed:  z = v(s);   radar, laser:  z = h(s) - t
@@ -541,15 +542,22 @@ class AltitudeEKF(Estimator):
         return h_s, list(row_h)
 
     def _scale_observed(self) -> bool:
-        """Whether the baro's scale factor k is observed: while another height source (the
+        """Whether the baro's scale factor k is observed: once the datum is pinned (the
+        height reference has delivered: the GNSS's first sample, or the terrain under the
+        first range sample with ``height_ref`` range), while another height source (the
         GNSS, a rangefinder) was fused within ``reset_timeout``, measuring the height's
-        changes the scale multiplies. Alone, the baro sees h + d + k·(h - h_c) and no
-        sample tells k from a height change: linearized at the estimate, the product k·h
-        still made k look observed, and h and d walked apart along the direction the baro
-        cannot see while P shrank (measured: a baro alone, told nothing, over a 10-55 m
-        flight: the height 128 m off at h_std 6.4 m within 12 s). So k is left out of the
-        baro's Jacobian row then (PX4 EKF2 estimates no baro bias while the baro is its
-        height reference, its fall-back without GNSS); its random walk goes on."""
+        changes the scale multiplies. The baro alone sees h + d + k·(h - h_c) and no sample
+        tells k from a height change; with no datum, every source's offset free, nothing
+        tells the height's level apart from the offsets'. Either way, linearized at the
+        estimate, the product k·(h - h_c) made k, and with it the level, look observed: h
+        and the offsets walked apart along the direction no source sees while P shrank
+        (measured: a baro alone, told nothing, on a 10-55 m flight, the height 128 m off at
+        h_std 6.4 m within 12 s; the SITL log with ``height_ref`` range and no
+        rangefinder, 16 m off at 4.3 m). So k is left out of the baro's Jacobian row then
+        (its random walk goes on). PX4 EKF2 has no scale factor, and estimates no baro bias
+        while the baro is its height reference, its fall-back without GNSS."""
+        if not (self._reference_seen if self._reference is not None else self._terrain_known):
+            return False
         now, window = self.time, self.params.reset_timeout
         return any(now - source.last_fused <= window for source in self._heights
                    if source.name != "baro")
