@@ -20,7 +20,8 @@ ECOS, a CSV written elsewhere) and need nothing from inside the FMU:
 * ``height reset``: ``n_height_resets`` increased (the height reset onto the rejected
   source's sample, named where the row shows which);
 * ``validity lost`` / ``validity regained``: ``h_valid`` turns false after having been true
-  (no height source fused for ``aiding_timeout``: dead reckoning), and true again;
+  (no height source fused for ``aiding_timeout``: dead reckoning; or a source the algorithm
+  cannot do without silent as long: XuSHAEKF's accelerometer), and true again;
 * the accelerometer found bad and consistent again (``BAD_ACC_VERTICAL`` set, cleared), a
   source's noise found too small and back (its ``NOISE_INFLATED`` set, cleared), the range
   aid started and stopped (``RANGE_AID`` set, cleared), the motion model's process noise

@@ -123,7 +123,7 @@ class AidSource:
         self.window = InnovationWindow()
         """The bias test's innovations over ``reset_timeout`` (fault layer)."""
         self.last_fused = -math.inf
-        """Time of the last fusion that aided the height (height sources)."""
+        """Time of the last fusion (a height source's: that aided the height)."""
         self.last_gated = -math.inf
         """Time of the last sample gated (its innovation and variance are the last ones)."""
         self.rejected_since: float | None = None
@@ -147,7 +147,7 @@ class AidSource:
         source and ``aids_height``."""
         self.rejected_since = None
         self.bits = self.fused_mask | (self.bits & self.inflated_mask)
-        if aids_height and self.height:
+        if aids_height or not self.height:
             self.last_fused = now
 
     def refused(self) -> None:

@@ -19,7 +19,8 @@ contract's, PX4 EKF2's conventions):
 * ``<source>_test_ratio``: y²/(g²·S) of the source's last sample, innovation y, its variance S
   and the gate g in standard deviations; > 1: rejected (0 while the gate is off);
 * ``<source>_rejected``: that source's samples rejected so far (``n_rejected``: all sources);
-* ``h_valid``: initialized and a height source fused within ``aiding_timeout``;
+* ``h_valid``: initialized and a height source fused within ``aiding_timeout`` (and each
+  of :attr:`Estimator.required_sources` delivering);
 * ``status``: the bits of :mod:`~altfusion.estimators.health`.
 
 With ``fault_detection`` the fault layer (:mod:`~altfusion.estimators.fault_detection`:
@@ -105,6 +106,10 @@ class Estimator(SampleIntake, Gating, Component):
     """The accelerometer is the prediction's input: the height sources' disagreement with the
     prediction judges it too (else only its scatter: :mod:`.accelerometer_check`)."""
 
+    required_sources: ClassVar[dict[str, str]] = {}
+    """Sources the algorithm cannot do without -> why (xu2016's accelerometer, its model's
+    input): ``h_valid`` is false while one has delivered nothing for ``aiding_timeout``."""
+
     stated_aliases: ClassVar[dict[str, str]] = {}
     """A sensor error model's stated name (``baro_bias_psd``... of
     :mod:`altfusion.systems.error_models`) -> this estimator's parameter of the same quantity
@@ -158,6 +163,7 @@ class Estimator(SampleIntake, Gating, Component):
         """The aid sources by name."""
         self._heights = tuple(source for source in self.aid_sources if source.height)
         self._last_aiding = -math.inf
+        self._started_at = math.inf
         noise = self.accelerometer_noise()
         judges = (*self._heights, *(s for s in self.aid_sources if s.name == "gps_vz")) \
             if self.acc_drives_prediction else ()
@@ -222,12 +228,18 @@ class Estimator(SampleIntake, Gating, Component):
         """``h_valid`` and ``status`` at the end of a step."""
         flags = self._step_flags
         started = self.started
-        aided = self.clock.now - self._last_aiding <= self.params.aiding_timeout
+        now, timeout = self.clock.now, self.params.aiding_timeout
+        aided = now - self._last_aiding <= timeout
         if started:
             flags |= STEP_BITS.INITIALIZED
             if not aided:
                 flags |= STEP_BITS.DEAD_RECKONING
-        self.h_valid = bool(started and aided)
+            self._started_at = min(self._started_at, now)
+        valid = started and aided
+        if valid and self.required_sources:
+            valid = all(now - max(self.aid[name].last_fused, self._started_at) <= timeout
+                        for name in self.required_sources)
+        self.h_valid = bool(valid)
         for source in self.aid_sources:
             flags |= source.bits
         check = self.acc_check

@@ -183,6 +183,8 @@ class XuSHAEKF(Estimator):
 
     Params = XuParams
     streams = (ACC, LASER, BARO, GPS)
+    required_sources = {"acc": "its process model is driven by the accelerometer (xu2016 eqs. "
+                               "10-11, 19: acc_z is the input u)"}
 
     def configure(self, clock) -> None:
         """Φ, B and B·Bᵀ of eqs. (10)-(11) for one step of the estimator, built once:

@@ -72,12 +72,6 @@ RECORDED = ("h_est", "h_std", "h_valid", "status")
 SOURCE_OF_SENSOR = {sensor: prefix for prefix, sensor in SENSOR_OF_PREFIX.items()}
 """Signal prefix (source) of each sensor component."""
 
-REQUIRED_SOURCES: dict[str, dict[str, str]] = {
-    "XuSHAEKF": {"acc": "its process model is driven by the accelerometer (xu2016 eqs. "
-                        "10-11, 19: acc_z is the input u)"},
-}
-"""Sources an estimator's algorithm cannot do without, and why; an estimator core class may
-declare its own as ``required_sources`` (a dict of the same form), which takes precedence."""
 
 class EvaluationError(CampaignError):
     """A scenario or estimator that cannot be evaluated; the message says why."""
@@ -129,9 +123,9 @@ def discover_estimators(fmu_paths: dict[str, Path]) -> dict[str, EstimatorInfo]:
 
 
 def required_sources(estimator: EstimatorInfo) -> dict[str, str]:
-    """Sources the estimator cannot do without -> why."""
-    declared = getattr(estimator.core, "required_sources", None)
-    return dict(declared) if declared is not None else REQUIRED_SOURCES.get(estimator.name, {})
+    """Sources the estimator cannot do without -> why (its core's
+    :attr:`~altfusion.estimators.base.Estimator.required_sources`)."""
+    return dict(getattr(estimator.core, "required_sources", {}))
 
 
 def sensor_sources(spec: SystemSpec) -> dict[str, str]:
