@@ -40,7 +40,8 @@ SIGNALS: dict[str, tuple[type, str | None, str]] = {
     "vz_est": (float, "m/s", "Vertical-speed estimate, positive up"),
     "h_std": (float, "m", "The filter's own standard deviation of h_est"),
     "h_valid": (bool, None, "h_est valid: the estimator is initialized and fused a height "
-                            "sample within aiding_timeout"),
+                            "sample within aiding_timeout (and a required source, XuSHAEKF's "
+                            "accelerometer, delivered within it)"),
     "status": (int, None, "Estimator status bit field (docs/estimator_health.md)"),
     "n_rejected": (int, None, "Samples rejected by the gates so far, all sources"),
     "n_ignored": (int, None, "Invalid, non-finite or absurdly stamped samples ignored so far"),

@@ -66,7 +66,8 @@ class HealthParams:
     parameters extend these."""
 
     aiding_timeout: float = param(5.0, "s", "h_valid turns false when no height sample was "
-                                            "fused for this long (PX4 EKF2: 5 s)", positive=True)
+                                            "fused, or a required source (XuSHAEKF's acc) gave "
+                                            "none, for this long (PX4 EKF2: 5 s)", positive=True)
     fault_detection: bool = param(True, None, "Height reset when every height source "
                                               "disagrees and the isolation flags; false: the "
                                               "paper's algorithm")
