@@ -459,6 +459,29 @@ def test_a_datum_move_leaves_the_offsets_no_sample_has_set():
     assert abs(flight.ekf.h_est - 430.0) < 1.0
 
 
+def wave_flight(seed: int, seconds: float, centre: float, swing: float, ripple: float,
+                radar: bool = False):
+    """AltitudeEKF told nothing on a flight of height centre + swing·sin(2πt/40 s) +
+    ripple·sin(2πt/7 s): a baro 3 m above the truth (σ 1 m, every other step), and with
+    ``radar`` a radio altimeter over flat ground at 0 m (σ 0.5 m, every fifth step); no GNSS,
+    so the height reference never comes. Yields (estimator, true height) after each step."""
+    rng = np.random.default_rng(seed)
+    ekf = core_estimator({})
+    feed = StreamFeeder(ekf)
+    for k in range(round(seconds / STEP)):
+        t = (k + 1) * STEP
+        h = centre + swing * math.sin(2 * math.pi * t / 40.0) \
+            + ripple * math.sin(2 * math.pi * t / 7.0)
+        samples = {}
+        if k % 2 == 0:
+            samples["baro"] = {"baro_h": h + 3.0 + rng.standard_normal(), "baro_p": 1e5,
+                               "baro_T": 288.0}
+        if radar and k % 5 == 0:
+            samples["radar"] = {"radar_h": h + 0.5 * rng.standard_normal(), "radar_valid": True}
+        feed.step(**samples)
+        yield ekf, h
+
+
 def test_a_baro_alone_keeps_its_scale_and_the_height_within_its_offset():
     """A baro alone, told nothing (the GNSS reference never comes), 3 m above the truth with
     1 m of noise at 25 Hz, on a flight between 10 and 55 m (sinusoids of 40 s and 7 s),
@@ -468,21 +491,10 @@ def test_a_baro_alone_keeps_its_scale_and_the_height_within_its_offset():
     0.71 h_std). With k estimated from the baro alone the height ran 128 m off at h_std
     6.4 m within 12 s."""
     for seed in range(1, 6):
-        rng = np.random.default_rng(seed)
-        ekf = core_estimator({})
-        feed = StreamFeeder(ekf)
-        errors, stds = [], []
-        for k in range(round(120.0 / STEP)):
-            t = (k + 1) * STEP
-            h = 30.0 + 20.0 * math.sin(2 * math.pi * t / 40.0) \
-                + 5.0 * math.sin(2 * math.pi * t / 7.0)
-            samples = {"baro": {"baro_h": h + 3.0 + rng.standard_normal(), "baro_p": 1e5,
-                                "baro_T": 288.0}} if k % 2 == 0 else {}
-            feed.step(**samples)
-            errors.append(ekf.h_est - h)
-            stds.append(ekf.h_std)
-        errors, stds = np.array(errors), np.array(stds)
-        assert ekf.h_valid and np.sqrt(np.mean(errors**2)) <= 3.5, seed
+        rows = [(ekf.h_est - h, ekf.h_std, ekf.h_valid)
+                for ekf, h in wave_flight(seed, 120.0, 30.0, 20.0, 5.0)]
+        errors, stds, valid = (np.array(c) for c in zip(*rows, strict=True))
+        assert valid[-1] and np.sqrt(np.mean(errors**2)) <= 3.5, seed
         assert np.all(np.abs(errors) <= 2.0 * stds), seed
 
 
@@ -496,18 +508,5 @@ def test_without_a_datum_the_baro_scale_and_the_height_level_stay_unlearnt():
     look observed: k 0.04-0.065, h_std 6.2-6.3 m, the level wandering by up to 4.6 m and the
     error beyond h_std."""
     for seed in range(1, 4):
-        rng = np.random.default_rng(seed)
-        ekf = core_estimator({})
-        feed = StreamFeeder(ekf)
-        for k in range(round(300.0 / STEP)):
-            t = (k + 1) * STEP
-            h = 10.0 + 8.0 * math.sin(2 * math.pi * t / 40.0) + math.sin(2 * math.pi * t / 7.0)
-            samples = {}
-            if k % 2 == 0:
-                samples["baro"] = {"baro_h": h + 3.0 + rng.standard_normal(), "baro_p": 1e5,
-                                   "baro_T": 288.0}
-            if k % 5 == 0:
-                samples["radar"] = {"radar_h": h + 0.5 * rng.standard_normal(),
-                                    "radar_valid": True}
-            feed.step(**samples)
+        *_, (ekf, _) = wave_flight(seed, 300.0, 10.0, 8.0, 1.0, radar=True)
         assert ekf.baro_scale == 0.0 and ekf.h_std >= 7.0 and ekf.h_valid, seed

@@ -125,7 +125,7 @@ def discover_estimators(fmu_paths: dict[str, Path]) -> dict[str, EstimatorInfo]:
 def required_sources(estimator: EstimatorInfo) -> dict[str, str]:
     """Sources the estimator cannot do without -> why (its core's
     :attr:`~altfusion.estimators.base.Estimator.required_sources`)."""
-    return dict(getattr(estimator.core, "required_sources", {}))
+    return dict(estimator.core.required_sources)
 
 
 def sensor_sources(spec: SystemSpec) -> dict[str, str]:
