@@ -284,23 +284,42 @@ def test_random_byte_flips_end_in_a_replay_or_a_one_line_error(fmus, tmp_path, c
             assert replayed <= LOGS["replay_px4_sitl"].stop_time
 
 
-def test_the_table_flags_a_divergent_estimate_and_gives_the_valid_fraction():
-    """An estimate 100 m (> DIVERGENCE_BOUND) from GPS and baro is flagged; rows more than
-    AIDING_TIMEOUT after the last height sample are not valid."""
+def replayed_columns(baro_h: float, estimates: dict[str, np.ndarray]) -> Results:
+    """20 rows at 1 s, GPS (500 m), baro (``baro_h``) and EKF2 samples up to t = 9 s, and the
+    ``estimates`` (component name -> h_est)."""
     time = np.arange(0.0, 20.0, 1.0)
     count = np.minimum(np.arange(20), 9).astype(float)      # samples up to t = 9 s
     columns = {f"{REPLAY}.gps_count": count, f"{REPLAY}.gps_fix": np.ones(20),
                f"{REPLAY}.gps_h": np.full(20, 500.0), f"{REPLAY}.gps_epv": np.ones(20),
-               f"{REPLAY}.baro_count": count, f"{REPLAY}.baro_h": np.full(20, 510.0),
+               f"{REPLAY}.baro_count": count, f"{REPLAY}.baro_h": np.full(20, baro_h),
                f"{REPLAY}.ekf_count": count, f"{REPLAY}.ekf_valid": np.ones(20),
                f"{REPLAY}.ekf_h": np.full(20, 500.0),
-               "good.h_est": np.full(20, 500.5), "bad.h_est": np.linspace(500.0, 600.0, 20)}
-    reports = compare_all(Results(time, columns), ["good", "bad"], start=0.0)
+               **{f"{name}.h_est": h for name, h in estimates.items()}}
+    return Results(time, columns)
+
+
+def test_the_table_flags_a_divergent_estimate_and_gives_the_valid_fraction():
+    """An estimate 100 m (> DIVERGENCE_BOUND) from GPS and baro is flagged; rows more than
+    AIDING_TIMEOUT after the last height sample are not valid."""
+    results = replayed_columns(510.0, {"good": np.full(20, 500.5),
+                                       "bad": np.linspace(500.0, 600.0, 20)})
+    reports = compare_all(results, ["good", "bad"], start=0.0)
     good, bad = reports[1], reports[2]
     assert good.diverged == "" and bad.diverged.startswith("|h - sensors|")
     # samples arrive at rows 1..9 (t = 1..9 s): valid from row 1 while t - 9 s <= 5 s, 14 of 20
     assert good.valid_fraction == pytest.approx(14 / 20)
     assert "70%" in format_table(reports)
+
+
+def test_an_estimate_in_the_baros_datum_is_not_flagged_diverged():
+    """AltitudeEKF with ``height_ref`` baro gives its height in the baro's datum: on the
+    Auterion log 155 m from the GPS altitude (> DIVERGENCE_BOUND), 0.2 m from the baro. Such
+    an estimate follows a height sensor and has not diverged; 100 m from the baro and the GPS
+    it has."""
+    results = replayed_columns(655.0, {"baro_datum": np.full(20, 655.2),
+                                       "bad": np.full(20, 755.0)})
+    reports = compare_all(results, ["baro_datum", "bad"], start=0.0)
+    assert reports[1].diverged == "" and reports[2].diverged.startswith("|h - sensors| 100 m")
 
 
 def test_altfusion_replay_says_the_health_events_and_writes_them(fmus, tmp_path, capsys):

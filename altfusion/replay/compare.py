@@ -22,8 +22,10 @@ have learnt the baro offset (the learning transients are in the plot, not in the
   rangefinder sample) arrived at most ``AIDING_TIMEOUT`` s before. The replay stops where the
   log's sensor data stop (:func:`~altfusion.replay.extract.extract_streams`).
 * diverged: flagged when, at some row from ``start`` on, the estimate is further than
-  ``DIVERGENCE_BOUND`` from every height sensor (GPS, and the baro moved into the GPS datum by
-  its median offset), or its ``h_std`` exceeds that bound.
+  ``DIVERGENCE_BOUND`` from every height sensor (GPS, the baro moved into the GPS datum by
+  its median offset, and the baro as it reads: an estimator whose height reference is the
+  baro, AltitudeEKF with ``height_ref`` baro, gives its height in the baro's datum), or its
+  ``h_std`` exceeds that bound.
 """
 
 import csv
@@ -147,7 +149,7 @@ def divergence(results: Results, h: np.ndarray, h_std: np.ndarray | None,
     baro = _held(results, "baro", "baro_h", None)
     both = np.isfinite(gps) & np.isfinite(baro)
     offset = float(np.median(baro[both] - gps[both])) if both.any() else 0.0
-    distance = np.fmin(np.abs(h - gps), np.abs(h - (baro - offset)))
+    distance = np.fmin(np.abs(h - gps), np.fmin(np.abs(h - (baro - offset)), np.abs(h - baro)))
     distance = np.where(np.isfinite(h), distance, np.inf)[after]
     distance[np.isnan(distance)] = 0.0                  # no height sensor yet: nothing to say
     if len(distance) and distance.max() > DIVERGENCE_BOUND:
