@@ -6,7 +6,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from altfusion.estimators.base import Estimator, HealthParams, Status, status_bits
-from altfusion.estimators.streams import BARO, RADAR
+from altfusion.estimators.streams import BARO, BARO_T, RADAR
 from altfusion.fmi import estimator_variables
 from altfusion.fmi.state import StateHeader, dump, load
 from altfusion.params import param
@@ -61,6 +61,31 @@ def test_held_input_holds_the_last_finite_value_and_notes_each_run_of_bad_values
     assert echo.n_ignored == 3
     notes = [n for n in echo.take_notes() if "wind_speed: non-finite sample ignored" in n]
     assert len(notes) == 2  # one per run of non-finite values
+
+
+class AirEcho(Echo):
+    """Echo of the baro stream with the air temperature beside its height."""
+
+    streams = (BARO_T,)
+    extra_inputs = ()
+
+    def propagate(self, dt: float) -> None:
+        pass
+
+
+def test_an_implausible_auxiliary_value_is_left_out_of_the_sample_and_noted_per_run():
+    """The air temperature at its unconnected start value (0 K) or beyond 400 K: the baro
+    sample is fused without it, each counted in n_ignored, one note per run of them."""
+    echo = AirEcho(step_size=0.1)
+    for n, temperature in enumerate([0.0, 0.0, 288.15, 500.0]):
+        echo.baro_h, echo.baro_T, echo.baro_time, echo.baro_count = 10.0, temperature, \
+            n * 0.1, n + 1
+        echo.do_step(n * 0.1, 0.1)
+    assert [sample.get("baro_T") for _, sample in echo.fused] == [None, None, 288.15, None]
+    assert all(sample["baro_h"] == 10.0 for _, sample in echo.fused)
+    assert echo.n_ignored == 3
+    notes = [n for n in echo.take_notes() if "baro_T:" in n and "plausible" in n]
+    assert len(notes) == 2  # one per run of implausible values
 
 
 def test_extra_inputs_default_to_zero_and_held_input_starts_from_zero_if_not_finite():

@@ -3,7 +3,10 @@
 A measurement update happens exactly once per new sample (its count changed). A sample that
 is invalid (its validity flag false) or not finite is ignored and noted (``n_ignored``); a
 value beyond its plausibility bound (:data:`~.streams.PLAUSIBLE_RANGE`) is rejected as its
-source's.
+source's. An auxiliary value (the air temperature beside the baro height) outside its
+plausible interval (:data:`~.streams.PLAUSIBLE_AUXILIARY`) is left out of the sample, which is
+fused without it (the estimator reads it with ``sample.get``); each counts in ``n_ignored``,
+the first of a run is noted.
 
 Time stamps. A sample stamped ahead of the estimator's clock is held until due: an engine
 that steps slow components first (ECOS) shows the estimator a 10 Hz GPS sample of t = 0.10 s
@@ -126,6 +129,8 @@ class SampleIntake:
             if abs(value) > bound:
                 self.refuse_implausible(self.aid[source], value, bound)
                 return None
+        for name, lowest, highest in stream.auxiliary:
+            self._check_auxiliary(sample, name, lowest, highest)
         if prefix in self._held:
             self.note(f"{prefix}: a held sample was replaced before it was due",
                       f"{prefix} replaced")
@@ -134,6 +139,22 @@ class SampleIntake:
         self._seen.add(prefix)
         last_stamp[prefix] = stamp
         return sample
+
+    def _check_auxiliary(self, sample: dict[str, float], name: str, lowest: float,
+                         highest: float) -> None:
+        """Leave the auxiliary value ``name`` out of ``sample`` if it lies outside
+        [``lowest``, ``highest``]: counted in ``n_ignored``, the first of a run noted."""
+        value = sample[name]
+        if lowest <= value <= highest:
+            self._bad_inputs.discard(name)
+            return
+        del sample[name]
+        self.n_ignored += 1
+        if name not in self._bad_inputs:
+            self._bad_inputs.add(name)
+            self.note(f"{name}: {value!r} is outside its plausible {lowest:g}-{highest:g} "
+                      f"(an input left unconnected?): the samples are fused without it "
+                      f"while it stays there")
 
     def _refuse(self, stream: Stream, message: str) -> None:
         """Refuse a sample of ``stream`` for its time stamp: counted in its source's

@@ -24,6 +24,15 @@ accelerometer's clipping level :data:`ACC_CLIP`; 1000 m/s, about Mach 3; ±100 k
 the Kármán line. A value beyond its bound cannot be a measurement: the sample is rejected as
 that source's (test ratio value²/bound²) and takes no part in the step."""
 
+PLAUSIBLE_AUXILIARY = {"baro_T": (150.0, 400.0)}
+"""Plausible intervals of the values a sample carries beside its measurement (an auxiliary
+value: no source of its own). The air temperature lies within 150-400 K: the atmosphere's
+coldest, the mesopause near 86 km, is ~187 K in the ISA, the coldest air measured at the
+surface 184 K and the hottest 330 K; 0 K, below, is the input's start value, read when it is
+left unconnected (WhangGAEstimator took it for a 288 K cold snap: its scale factor went to
+~1 and its height ran 460 m off, ``h_valid`` true). A value outside is left out of the
+sample (the estimator fuses the rest without it) and noted."""
+
 
 @dataclass(frozen=True, eq=False)
 class Stream:
@@ -48,6 +57,8 @@ class Stream:
     """The getter of a sample's :attr:`fields` from an object: a tuple of their values."""
     bounds: tuple[tuple[str, str, float], ...] = field(init=False, repr=False)
     """(input, source charged, bound) of each value with a :data:`PLAUSIBLE_RANGE`."""
+    auxiliary: tuple[tuple[str, float, float], ...] = field(init=False, repr=False)
+    """(input, lowest, highest) of each value with a :data:`PLAUSIBLE_AUXILIARY` interval."""
 
     def __post_init__(self) -> None:
         set_once = partial(object.__setattr__, self)          # frozen: derived once, here
@@ -57,6 +68,8 @@ class Stream:
         set_once("read", attrgetter(*self.fields))
         set_once("bounds", tuple((name, *PLAUSIBLE_RANGE[name]) for name in self.fields
                                  if name in PLAUSIBLE_RANGE))
+        set_once("auxiliary", tuple((name, *PLAUSIBLE_AUXILIARY[name]) for name in self.values
+                                    if name in PLAUSIBLE_AUXILIARY))
 
 
 BARO = Stream("baro", ("baro_h",))

@@ -182,7 +182,7 @@ class WhangGAEstimator(Estimator):
     def _measurement_update(self, air_data, gps) -> None:
         """Air data: λ-update; GPS: z-update; then compensation with the latest estimates."""
         if air_data is not None:
-            self._lambda_update(air_data["baro_T"])
+            self._lambda_update(air_data.get("baro_T"))
             self.accept(self.aid["baro"])
             self.baro = air_data["baro_h"]
         if gps is not None:
@@ -190,8 +190,11 @@ class WhangGAEstimator(Estimator):
         if air_data is not None:
             self._compensate()
 
-    def _lambda_update(self, temperature: float) -> None:
-        """Eqs. (6), (7), (19)-(22): scale factor from the ADM temperature."""
+    def _lambda_update(self, temperature: float | None) -> None:
+        """Eqs. (6), (7), (19)-(22): scale factor from the ADM temperature (None: an
+        implausible one, left out by the intake; the z-update alone estimates it then)."""
+        if temperature is None:
+            return
         p = self.params
         lever = self.h_prior - p.H0
         sign = 1.0 if p.paper_lambda_sign else -1.0
@@ -276,7 +279,7 @@ class WhangGAEstimator(Estimator):
             if sample is not None:
                 self._interval(name, sample[f"{name}_time"])
         if air_data is not None:
-            self._lambda_update(air_data["baro_T"])
+            self._lambda_update(air_data.get("baro_T"))
             self._baro_rejected = not self._gate_baro(air_data["baro_h"])
             if not self._baro_rejected:
                 self.baro = air_data["baro_h"]
