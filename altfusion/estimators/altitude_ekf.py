@@ -100,7 +100,12 @@ from altfusion.estimators.noise_check import NoiseCheck
 from altfusion.estimators.process_noise import MotionNoise, maximum_scale
 from altfusion.estimators.range_aid import RangeAid
 from altfusion.estimators.streams import ACC, BARO_ALL, GPS_ALL, LASER, RADAR
-from altfusion.estimators.stuck import StillReceiver, StuckCheck
+from altfusion.estimators.stuck import (
+    StillReceiver,
+    StuckCheck,
+    refuse_stuck,
+    stuck_samples_param,
+)
 from altfusion.params import param
 
 H, V, BA, D, K, T, G = range(7)
@@ -204,10 +209,7 @@ class AltitudeEKFParams(HealthParams):
     range_aid_max_height: float = param(25.0, "m", "The range aid stops above this range "
                                                    "(PX4 EKF2_RNG_A_HMAX; xu2016's 25 m)",
                                         positive=True)
-    stuck_samples: int = param(10, None, "A reading repeated bit for bit this many times in "
-                                         "a row (a frozen sensor, an unconnected input) is "
-                                         "not fused until it changes, with fault_detection "
-                                         "(0: off)", min=0)
+    stuck_samples: int = stuck_samples_param()
     acc_timeout: float = param(0.5, "s", "Without an accelerometer sample for this long the "
                                          "motion model takes over", positive=True)
     baro_delay: float = param(0.0, "s", "Time from a baro measurement to its stamp: the "
@@ -421,18 +423,7 @@ class AltitudeEKF(Estimator):
             return False
         if source in self.noise_checks:
             self.noise_checks[source].forget()
-        aid = self.aid[source]
-        if at_rest is not None and not aid.isolated and at_rest():
-            if check.repeats == check.limit:
-                self.note(f"{source}: the same reading {reading:.6g} {check.limit + 1} times "
-                          f"in a row with the vertical speed at 0: the receiver holds still "
-                          f"(static hold); not fused while it repeats, not a fault")
-            return True
-        if check.repeats == check.limit or not aid.isolated:
-            aid.isolate()
-            self.note(f"{source}: the same reading {reading:.6g} {check.repeats + 1} times in "
-                      f"a row: stuck, isolated until it changes and passes its gate")
-        aid.refused()
+        refuse_stuck(check, self.aid[source], reading, self.note, at_rest)
         return True
 
     def _gnss_at_rest(self, sample) -> bool:

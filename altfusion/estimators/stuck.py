@@ -25,6 +25,17 @@ receiver's own heights over the run of zeros: a receiver that holds still does n
 """
 
 import math
+from collections.abc import Callable
+
+from altfusion.estimators.aid_source import AidSource
+from altfusion.params import param
+
+
+def stuck_samples_param() -> int:
+    """The ``stuck_samples`` parameter of an estimator with stuck checks (the fault layer)."""
+    return param(10, None, "A reading repeated bit for bit this many times in a row (a frozen "
+                           "sensor, an unconnected input) is not fused until it changes, with "
+                           "fault_detection (0: off)", min=0)
 
 
 class StuckCheck:
@@ -94,3 +105,24 @@ class StillReceiver:
             return False
         slope = (n * self.sum_th - self.sum_t * self.sum_h) / spread
         return slope * slope * spread <= gate * gate * sigma * sigma * n and math.isfinite(slope)
+
+
+def refuse_stuck(check: StuckCheck, source: AidSource, reading: float,
+                 note: Callable[[str], None], at_rest: Callable[[], bool] | None = None) -> None:
+    """What becomes of ``reading`` of ``source``, found stuck by ``check`` (not to be fused):
+    a GNSS reading repeated while ``at_rest`` (the receiver holds still:
+    :class:`StillReceiver`) is only held; any other is refused (counted) and, when it
+    sticks, ``source`` is isolated (a failed sensor, until a changed reading passes its gate)
+    and ``note`` told."""
+    name = source.name
+    if at_rest is not None and not source.isolated and at_rest():
+        if check.repeats == check.limit:
+            note(f"{name}: the same reading {reading:.6g} {check.limit + 1} times in a row "
+                 f"with the vertical speed at 0: the receiver holds still (static hold); not "
+                 f"fused while it repeats, not a fault")
+        return
+    if check.repeats == check.limit or not source.isolated:
+        source.isolate()
+        note(f"{name}: the same reading {reading:.6g} {check.repeats + 1} times in a row: "
+             f"stuck, isolated until it changes and passes its gate")
+    source.refused()
