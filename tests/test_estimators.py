@@ -81,14 +81,15 @@ def test_a_failed_stream_is_noted_once_per_second_and_counted_at_every_sample():
     each of its 10 Hz samples for 3 s while the baro holds the height, likewise: three
     notes, every rejection counted."""
     feeder = StreamFeeder(BaselineKF(step_size=0.01))
+    baro = [100.0, 100.001]              # a reading repeated bit for bit would be stuck
     for k in range(100):
-        feeder.step(**baro_gps(baro=100.0, gps=100.0 if (k + 1) % 10 == 0 else None))
+        feeder.step(**baro_gps(baro=baro[k % 2], gps=100.0 if (k + 1) % 10 == 0 else None))
     e = feeder.estimator
     e.take_notes()
     for _ in range(300):
         feeder.step(**baro_gps(baro=math.nan))
     for k in range(300):
-        feeder.step(**baro_gps(baro=100.0, gps=1100.0 if (k + 1) % 10 == 0 else None))
+        feeder.step(**baro_gps(baro=baro[k % 2], gps=1100.0 if (k + 1) % 10 == 0 else None))
     notes = e.take_notes()
     baro = [n for n in notes if "baro: non-finite sample ignored" in n]
     gps = [n for n in notes if "gps: sample rejected" in n]
@@ -102,8 +103,8 @@ def test_a_failed_stream_is_noted_once_per_second_and_counted_at_every_sample():
 @pytest.mark.parametrize("cls", ESTIMATORS)
 def test_gps_without_fix_is_not_fused(cls):
     feeder = StreamFeeder(cls(step_size=0.2))
-    for _ in range(20):
-        feeder.step(**baro_gps(baro=100.0, gps=100.0))
+    for k in range(20):            # the baro changing by 1 mm: repeated it would be stuck
+        feeder.step(**baro_gps(baro=100.0 + 0.001 * (k % 2), gps=100.0))
     feeder.step(**baro_gps(baro=100.0, gps=5000.0, fix=False))
     assert feeder.estimator.h_est == pytest.approx(100.0, abs=1.0)
 
@@ -262,11 +263,12 @@ def test_gps_before_the_first_baro_sample_is_not_fused(cls):
     feeder = StreamFeeder(cls(params, step_size=0.2))
     feeder.step(**baro_gps(gps=429.0))
     assert any("not fused" in n for n in feeder.estimator.take_notes())
-    for _ in range(20):
-        feeder.step(**baro_gps(baro=275.0, gps=429.0))
+    for k in range(20):
+        feeder.step(**baro_gps(baro=275.0 + 0.001 * (k % 2), gps=429.0))
     assert feeder.estimator.n_rejected == 0
     # Hajiyev eqs. (30), (27): S R_B = Δ² - R_GPS, so K = 1 - R_GPS/Δ² with Δ = 154 m;
-    # Whang: the bias absorbs the 154 m offset; noiseless data, so h_est -> 429 m
+    # Whang: the bias absorbs the 154 m offset; noiseless data (the baro changing by 1 mm:
+    # a reading repeated bit for bit would be stuck), so h_est -> 429 m
     expected = 275.0 + 154.0 * (1 - 169.0 / 154.0**2) if params is None else 429.0
     assert feeder.estimator.h_est == pytest.approx(expected, abs=0.01)
 

@@ -159,6 +159,15 @@ class AidSource:
     def isolate(self) -> None:
         self.bits |= self.isolated_mask
 
+    def rejudge(self) -> None:
+        """Withdraw the fault layer's verdict on this source (it was judged against a stuck
+        source: :meth:`~altfusion.estimators.gating.Gating.restart_without`): its bias
+        window, bias, isolation and run of rejections forgotten."""
+        self.window.clear()
+        self.biased = False
+        self.rejected_since = None
+        self.bits &= ~self.isolated_mask
+
     def mark_inflated(self, inflated: bool) -> None:
         """Set (or clear) the source's ``NOISE_INFLATED`` bit
         (:mod:`~altfusion.estimators.noise_check`)."""

@@ -79,9 +79,7 @@ Deviations from PX4 EKF2 (reasons in docs/altitude_ekf.md):
 """
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
-from functools import partial
 
 from altfusion.errors import ParameterError
 from altfusion.estimators.aid_source import FUSED
@@ -100,12 +98,6 @@ from altfusion.estimators.noise_check import NoiseCheck
 from altfusion.estimators.process_noise import MotionNoise, maximum_scale
 from altfusion.estimators.range_aid import RangeAid
 from altfusion.estimators.streams import ACC, BARO_ALL, GPS_ALL, LASER, RADAR
-from altfusion.estimators.stuck import (
-    StillReceiver,
-    StuckCheck,
-    refuse_stuck,
-    stuck_samples_param,
-)
 from altfusion.params import param
 
 H, V, BA, D, K, T, G = range(7)
@@ -209,7 +201,6 @@ class AltitudeEKFParams(HealthParams):
     range_aid_max_height: float = param(25.0, "m", "The range aid stops above this range "
                                                    "(PX4 EKF2_RNG_A_HMAX; xu2016's 25 m)",
                                         positive=True)
-    stuck_samples: int = stuck_samples_param()
     acc_timeout: float = param(0.5, "s", "Without an accelerometer sample for this long the "
                                          "motion model takes over", positive=True)
     baro_delay: float = param(0.0, "s", "Time from a baro measurement to its stamp: the "
@@ -279,11 +270,6 @@ class AltitudeEKF(Estimator):
                                               p.adaptive_max, self.noise_stated[name])
                              for name in NOISE_CHECKED if p.adaptive_noise}
         """Each checked source's noise check (none without ``adaptive_noise``)."""
-        self.stuck_checks = {name: StuckCheck(p.stuck_samples) for name in self.aid} \
-            if p.fault_detection and p.stuck_samples > 0 else {}
-        """Each source's check for a stuck reading (none without the fault layer)."""
-        self.gnss_still = StillReceiver()
-        """The GNSS's heights over its current run of vertical speeds reading 0."""
         self.range_aid = RangeAid((self.aid["radar"], self.aid["laser"]), self._heights,
                                   p.range_aid_max_height, p.range_hysteresis) \
             if p.range_aid else None
@@ -372,23 +358,27 @@ class AltitudeEKF(Estimator):
 
     # ------------------------------------------------------------------ measurements
     def fuse_samples(self, samples) -> None:
+        """The new samples of a step, without their stuck readings (the intake's
+        :mod:`~altfusion.estimators.stuck` check; a stuck source's noise-check pair is
+        broken): the prediction with the accelerometer's, then the GNSS height and speed,
+        the baro and the rangefinders."""
+        if self.stuck is not None:
+            for source in self.stuck.found:
+                if source in self.noise_checks:
+                    self.noise_checks[source].forget()
         acc = samples.get(ACC)
-        if acc is not None and self._stuck("acc", acc["acc_z"]):
-            acc = None
         self._predict(acc)
         if acc is not None:
             self.accept(self.aid["acc"])
         gps = samples.get(GPS_ALL)
         if gps is not None:
             instant = gps["gps_time"] - self.params.gps_delay
-            self.gnss_still.sample(instant, gps["gps_h"], gps["gps_vz"])
-            at_rest = partial(self._gnss_at_rest, gps)
-            if not self._stuck("gps", gps["gps_h"], at_rest):
+            if "gps_h" in gps:
                 self._fuse_height("gps", gps["gps_h"], instant, self._gps_sigma(gps))
-            if self.started and not self._stuck("gps_vz", gps["gps_vz"], at_rest):
+            if self.started and "gps_vz" in gps:
                 self._fuse_speed(gps["gps_vz"], instant)
         baro = samples.get(BARO_ALL)
-        if baro is not None and not self._stuck("baro", baro["baro_h"]):
+        if baro is not None and "baro_h" in baro:
             self._fuse_height("baro", baro["baro_h"], baro["baro_time"] - self.params.baro_delay,
                               self.sensor_noise["baro"])
         for name, stream in RANGEFINDERS:
@@ -396,8 +386,6 @@ class AltitudeEKF(Estimator):
             if sample is None:
                 continue
             reading, stamp = sample[stream.values[0]], sample[stream.time] - self.params.range_delay
-            if self._stuck(name, reading):
-                continue
             sigma = self.sensor_noise[name]
             if self.range_aid is not None and self.started:
                 self.range_aid.sample(name, stamp, reading, self._noise_variance(name, sigma),
@@ -411,22 +399,7 @@ class AltitudeEKF(Estimator):
         self._adapt_motion_noise()
         self._publish()
 
-    def _stuck(self, source: str, reading: float,
-               at_rest: Callable[[], bool] | None = None) -> bool:
-        """``source``'s reading is stuck (:mod:`~altfusion.estimators.stuck`): not fused, its
-        noise check's pair broken. A GNSS reading repeated while ``at_rest`` (the receiver
-        holds still: :meth:`_gnss_at_rest`) is only held; any other is refused (counted) and,
-        when it sticks, isolated (a failed sensor, until a changed reading passes its gate)
-        and noted."""
-        check = self.stuck_checks.get(source)
-        if check is None or not check.stuck(reading):
-            return False
-        if source in self.noise_checks:
-            self.noise_checks[source].forget()
-        refuse_stuck(check, self.aid[source], reading, self.note, at_rest)
-        return True
-
-    def _gnss_at_rest(self, sample) -> bool:
+    def gnss_at_rest(self, sample) -> bool:
         """The GNSS receiver holds still (:class:`~altfusion.estimators.stuck.StillReceiver`):
         its vertical speed reads exactly 0 and its heights since the speed first read 0
         show no slope beyond the gate, judged with the GNSS height noise of this
@@ -435,7 +408,7 @@ class AltitudeEKF(Estimator):
         if gate <= 0.0:
             return False
         sigma = math.sqrt(self._noise_variance("gps", self._gps_sigma(sample)))
-        return self.gnss_still.still(sigma, gate)
+        return self.stuck.gnss_still.still(sigma, gate)
 
     def _update_range_aid(self) -> None:
         """The conditional range aid decided for this step: the terrain held while it is

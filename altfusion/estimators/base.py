@@ -33,7 +33,6 @@ with :meth:`Estimator.held_input`, which holds the last finite value over non-fi
 import math
 from abc import abstractmethod
 from collections.abc import Mapping
-from dataclasses import dataclass
 from typing import ClassVar
 
 from altfusion.component import Component
@@ -48,9 +47,9 @@ from altfusion.estimators.health import (
     source_bit,
     status_bits,
 )
+from altfusion.estimators.health_params import HealthParams
 from altfusion.estimators.intake import SampleIntake
 from altfusion.estimators.streams import Stream, stream_inputs, stream_sources
-from altfusion.params import param
 
 __all__ = ["HEIGHT_SOURCES", "MAX_DELAY", "AidSource", "Estimator", "HealthParams",
            "SourceBit", "Status", "Verdict", "source_bit", "status_bits"]
@@ -58,32 +57,6 @@ __all__ = ["HEIGHT_SOURCES", "MAX_DELAY", "AidSource", "Estimator", "HealthParam
 MAX_DELAY = 0.5
 """Longest sensor delay, s: the state is taken back along the model over the delay with its
 process noise neglected (PX4 bounds its sensor delays at 0.3-0.5 s too)."""
-
-
-@dataclass(frozen=True)
-class HealthParams:
-    """The parameters every estimator shares (health and sample timing); each estimator's
-    parameters extend these."""
-
-    aiding_timeout: float = param(5.0, "s", "h_valid turns false when no height sample was "
-                                            "fused, or a required source (XuSHAEKF's acc) gave "
-                                            "none, for this long (PX4 EKF2: 5 s)", positive=True)
-    fault_detection: bool = param(True, None, "Height reset when every height source "
-                                              "disagrees and the isolation flags; false: the "
-                                              "paper's algorithm")
-    reset_timeout: float = param(2.5, "s", "A height source rejected this long while no "
-                                           "source is fused resets the height; rejected this "
-                                           "long while another is fused, it is isolated",
-                                 positive=True)
-    max_vz: float = param(50.0, "m/s", "Largest plausible vertical speed: bounds the jump of a "
-                                       "height between two samples where the estimator has "
-                                       "no speed state to predict it", positive=True)
-    max_sample_lead: float = param(1.0, "s", "A sample stamped at most this far ahead of the "
-                                             "estimator's clock is held until due; further: "
-                                             "refused (counted in <prefix>_rejected)", min=0.0)
-    max_sample_delay: float = param(3.0, "s", "A sample stamped more than this behind the "
-                                              "estimator's clock is stale: refused (counted in "
-                                              "<prefix>_rejected)", positive=True)
 
 
 def _source_output(index: int, field: str) -> property:
@@ -119,6 +92,7 @@ class Estimator(SampleIntake, Gating, Component):
     def __init_subclass__(cls, **kwargs) -> None:
         super().__init_subclass__(**kwargs)
         if "streams" in cls.__dict__:
+            cls.gnss_speed_stream = next((s for s in cls.streams if s.gnss_speed), None)
             for index, source in enumerate(cls.sources()):
                 setattr(cls, f"{source}_test_ratio", _source_output(index, "test_ratio"))
                 setattr(cls, f"{source}_rejected", _source_output(index, "rejected"))

@@ -51,6 +51,21 @@ class Gating:
                 return verdict
         return self._reject(source, innovation, ratio, biased)
 
+    def restart_without(self, name: str) -> None:
+        """Start the filter afresh without source ``name``, found stuck since before the
+        filter started (a frozen sensor, an input left unconnected): everything the filter
+        learnt rests on its repeated reading, and so does the fault layer's judgement of
+        the other height sources, which is withdrawn (:meth:`AidSource.rejudge`). Without,
+        a radio altimeter reading 0 from the start had YangFusionKF's bias test isolate the
+        baro and the GNSS for good, the height 90 m off at an h_std of 1-3 m."""
+        self.note(f"{name}: stuck since before the filter started: the filter starts afresh "
+                  f"without it")
+        for source in self._heights:
+            if source.name != name:
+                source.rejudge()
+        self.started = False
+        self.initialize_filter()
+
     def refuse_implausible(self, source: AidSource, value: float, bound: float) -> None:
         """Reject a sample of ``source`` whose value lies beyond its plausibility ``bound``
         (test ratio value²/bound²)."""

@@ -3,7 +3,11 @@
 A measurement update happens exactly once per new sample (its count changed). A sample that
 is invalid (its validity flag false) or not finite is ignored and noted (``n_ignored``); a
 value beyond its plausibility bound (:data:`~.streams.PLAUSIBLE_RANGE`) is rejected as its
-source's. An auxiliary value (the air temperature beside the baro height) outside its
+source's. With ``fault_detection`` a reading repeated bit for bit ``stuck_samples`` times
+in a row (:mod:`~altfusion.estimators.stuck`) is left out of its sample (the sample dropped
+when none of its measured values is left), its source refused and isolated, or, a GNSS
+reading while the receiver holds still (:meth:`SampleIntake.gnss_at_rest`), only held. An
+auxiliary value (the air temperature beside the baro height) outside its
 plausible interval (:data:`~.streams.PLAUSIBLE_AUXILIARY`) is left out of the sample, which is
 fused without it (the estimator reads it with ``sample.get``); each counts in ``n_ignored``,
 the first of a run is noted.
@@ -23,10 +27,12 @@ Inputs outside any stream (``extra_inputs``) are read with :meth:`SampleIntake.h
 """
 
 import math
+from functools import partial
 from typing import ClassVar
 
 from altfusion.estimators.health import STEP_BITS
 from altfusion.estimators.streams import Stream
+from altfusion.estimators.stuck import StuckReadings, refuse_stuck
 
 
 class SampleIntake:
@@ -36,6 +42,9 @@ class SampleIntake:
     streams: ClassVar[tuple[Stream, ...]]
     extra_inputs: ClassVar[tuple[str, ...]] = ()
     """Real inputs outside any stream (no count), read with :meth:`held_input`."""
+    gnss_speed_stream: ClassVar[Stream | None] = None
+    """The stream carrying the GNSS's heights and vertical speed, if any (set with
+    ``streams``: a class attribute, never part of a saved state)."""
 
     def declare_inputs(self) -> None:
         """Every stream input and extra input at its default (before any is given)."""
@@ -65,6 +74,10 @@ class SampleIntake:
         for name in self.extra_inputs:
             value = float(getattr(self, name))
             self._held_inputs[name] = value if math.isfinite(value) else 0.0
+        params = self.params
+        self.stuck = StuckReadings(self.sources(), params.stuck_samples) if (
+            params.fault_detection and params.stuck_samples > 0) else None
+        """The stuck check of the readings (fault layer; None without)."""
 
     def due_samples(self) -> dict[Stream, dict[str, float]]:
         """The samples to fuse in this step: the new ones not stamped ahead of the clock and
@@ -91,7 +104,49 @@ class SampleIntake:
                 if sample is not None and sample[stream.time] <= due_by:
                     del held[prefix]
                     samples[stream] = sample
+        if self.stuck is not None:
+            if samples:
+                return self._without_stuck(samples)
+            self.stuck.found = ()
         return samples
+
+    def _without_stuck(self, samples: dict[Stream, dict[str, float]],
+                       ) -> dict[Stream, dict[str, float]]:
+        """``samples`` without their stuck readings (:func:`~.stuck.refuse_stuck`): each
+        left out of its sample, a sample left without a measured value dropped; a GNSS
+        reading repeated while the receiver holds still (:meth:`gnss_at_rest`) only held."""
+        stuck = self.stuck
+        checks = stuck.checks
+        now = self.clock.now
+        found = [(stream, name, source) for stream, sample in samples.items()
+                 for name, source in stream.checked if checks[source].stuck(sample[name], now)]
+        gnss = samples.get(self.gnss_speed_stream) if self.gnss_speed_stream else None
+        if gnss is not None:
+            stuck.gnss_still.sample(gnss["gps_time"], gnss["gps_h"], gnss["gps_vz"])
+        if not found:
+            stuck.found = ()
+            return samples
+        stuck.found = tuple(source for _, _, source in found)
+        samples = dict(samples)
+        for stream, name, source in found:
+            sample = samples[stream]
+            at_rest = partial(self.gnss_at_rest, sample) if stream.gnss_speed else None
+            check = checks[source]
+            if refuse_stuck(check, self.aid[source], sample[name], self.note, at_rest) and \
+                    self.started and check.since <= self._started_at:
+                self.restart_without(source)
+            remaining = {key: value for key, value in sample.items() if key != name}
+            if any(value in remaining for value, _ in stream.checked):
+                samples[stream] = remaining
+            else:
+                del samples[stream]
+        return samples
+
+    def gnss_at_rest(self, sample: dict[str, float]) -> bool:
+        """The GNSS receiver of this ``sample`` holds still (its vertical speed reads
+        exactly 0 and its heights show no climb: :class:`~.stuck.StillReceiver`), judged
+        with the estimator's GNSS height noise; False (the default) where it cannot tell."""
+        return False
 
     def _new_sample(self, stream: Stream, count: int, now: float) -> dict[str, float] | None:
         """The sample of ``stream``, whose count changed to ``count``, if it is valid, finite,

@@ -59,6 +59,12 @@ class Stream:
     """(input, source charged, bound) of each value with a :data:`PLAUSIBLE_RANGE`."""
     auxiliary: tuple[tuple[str, float, float], ...] = field(init=False, repr=False)
     """(input, lowest, highest) of each value with a :data:`PLAUSIBLE_AUXILIARY` interval."""
+    checked: tuple[tuple[str, str], ...] = field(init=False, repr=False)
+    """(input, source) of each measured value the stuck check watches
+    (:mod:`~altfusion.estimators.stuck`): every one, but a GNSS's without its vertical speed,
+    which alone tells a receiver in static hold from a frozen one."""
+    gnss_speed: bool = field(init=False, repr=False)
+    """The stream carries the GNSS vertical speed (``gps_vz``)."""
 
     def __post_init__(self) -> None:
         set_once = partial(object.__setattr__, self)          # frozen: derived once, here
@@ -70,6 +76,9 @@ class Stream:
                                  if name in PLAUSIBLE_RANGE))
         set_once("auxiliary", tuple((name, *PLAUSIBLE_AUXILIARY[name]) for name in self.values
                                     if name in PLAUSIBLE_AUXILIARY))
+        set_once("gnss_speed", "gps_vz" in self.values)
+        set_once("checked", tuple((name, source) for name, source, _ in self.bounds
+                                  if self.gnss_speed or not source.startswith("gps")))
 
 
 BARO = Stream("baro", ("baro_h",))

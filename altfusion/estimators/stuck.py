@@ -25,7 +25,7 @@ receiver's own heights over the run of zeros: a receiver that holds still does n
 """
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 
 from altfusion.estimators.aid_source import AidSource
 from altfusion.params import param
@@ -41,7 +41,7 @@ def stuck_samples_param() -> int:
 class StuckCheck:
     """Whether one reading is stuck (:meth:`stuck`)."""
 
-    __slots__ = ("limit", "last", "repeats")
+    __slots__ = ("limit", "last", "repeats", "since")
 
     def __init__(self, limit: int) -> None:
         self.limit = limit
@@ -50,13 +50,15 @@ class StuckCheck:
         """The last reading."""
         self.repeats = 0
         """How many samples in a row repeated it."""
+        self.since = 0.0
+        """Time of the first of them."""
 
-    def stuck(self, value: float) -> bool:
-        """The next reading: True while it is stuck."""
+    def stuck(self, value: float, now: float = 0.0) -> bool:
+        """The next reading, taken at ``now``: True while it is stuck."""
         if value == self.last:
             self.repeats += 1
         else:
-            self.last, self.repeats = value, 0
+            self.last, self.repeats, self.since = value, 0, now
         return 0 < self.limit <= self.repeats
 
 
@@ -107,22 +109,43 @@ class StillReceiver:
         return slope * slope * spread <= gate * gate * sigma * sigma * n and math.isfinite(slope)
 
 
+class StuckReadings:
+    """The fault layer's stuck check of an estimator's readings
+    (:meth:`~altfusion.estimators.intake.SampleIntake.due_samples`): a :class:`StuckCheck` per
+    source, the GNSS's :class:`StillReceiver`, and the sources found stuck in the last step."""
+
+    __slots__ = ("checks", "gnss_still", "found")
+
+    def __init__(self, sources: Iterable[str], limit: int) -> None:
+        self.checks = {source: StuckCheck(limit) for source in sources}
+        self.gnss_still = StillReceiver()
+        self.found: tuple[str, ...] = ()
+        """The sources whose reading was stuck in the last step."""
+
+
 def refuse_stuck(check: StuckCheck, source: AidSource, reading: float,
-                 note: Callable[[str], None], at_rest: Callable[[], bool] | None = None) -> None:
+                 note: Callable[[str], None], at_rest: Callable[[], bool] | None = None) -> bool:
     """What becomes of ``reading`` of ``source``, found stuck by ``check`` (not to be fused):
     a GNSS reading repeated while ``at_rest`` (the receiver holds still:
     :class:`StillReceiver`) is only held; any other is refused (counted) and, when it
     sticks, ``source`` is isolated (a failed sensor, until a changed reading passes its gate)
-    and ``note`` told."""
+    and ``note`` told. Its first ``limit`` repetitions were fused before they could be told
+    from readings: its bias window and last fusion are forgotten then (it vouches for no
+    prediction in the bias test). True if it is found stuck now (its run began at
+    ``check.since``)."""
     name = source.name
     if at_rest is not None and not source.isolated and at_rest():
         if check.repeats == check.limit:
             note(f"{name}: the same reading {reading:.6g} {check.limit + 1} times in a row "
                  f"with the vertical speed at 0: the receiver holds still (static hold); not "
                  f"fused while it repeats, not a fault")
-        return
-    if check.repeats == check.limit or not source.isolated:
+        return False
+    found = check.repeats == check.limit or not source.isolated
+    if found:
+        source.window.clear()
+        source.last_fused = -math.inf
         source.isolate()
         note(f"{name}: the same reading {reading:.6g} {check.repeats + 1} times in a row: "
              f"stuck, isolated until it changes and passes its gate")
     source.refused()
+    return found

@@ -61,10 +61,10 @@ not in the paper; ``docs/estimators.md`` says which fault-suite scenario each pa
 * the accelerometer's noise measured from its samples' scatter and used in the IMU row when
   it is more than 1.5x σ_a (:mod:`~altfusion.estimators.accelerometer_check`; only the
   scatter: the height sources' disagreement does not judge it here, see docs/estimators.md);
-* stuck readings (:mod:`~altfusion.estimators.stuck`, as AltitudeEKF): a reading repeated
-  bit for bit ``stuck_samples`` times in a row is not fused until it changes. A GNSS vertical
-  speed left unconnected reads 0 while the heights arrive; fused, it held the speed at 0
-  through every climb (on ±10 m waves at 2 m/s: 8.8 m RMS at coverage 13 %, ``h_valid``
+* stuck readings (:mod:`~altfusion.estimators.stuck`, in the shared intake): a reading
+  repeated bit for bit ``stuck_samples`` times in a row is not fused until it changes. A
+  GNSS vertical speed left unconnected reads 0 while the heights arrive; fused, it held the
+  speed at 0 through every climb (on ±10 m waves at 2 m/s: 8.8 m RMS at coverage 13 %, ``h_valid``
   true). A receiver that holds still repeats itself too, and is only held;
 * isolation, height resets and re-referencing (:mod:`~altfusion.estimators.fault_detection`):
   an isolated baro or GPS with a constant offset is re-admitted with its offset state reset
@@ -96,12 +96,6 @@ from altfusion.estimators.kalman import (
     white_jerk_noise,
 )
 from altfusion.estimators.streams import ACC, BARO, GPS_VZ, RADAR
-from altfusion.estimators.stuck import (
-    StillReceiver,
-    StuckCheck,
-    refuse_stuck,
-    stuck_samples_param,
-)
 from altfusion.params import param
 
 HEIGHT_SENSORS = ("radar", "gps", "baro")
@@ -205,7 +199,6 @@ class YangParams(HealthParams):
                                         "height and on the GPS vertical speed against the "
                                         "predicted speed, in standard deviations (0: off); not "
                                         "in the paper", min=0.0)
-    stuck_samples: int = stuck_samples_param()
 
 
 class YangFusionKF(Estimator):
@@ -246,11 +239,6 @@ class YangFusionKF(Estimator):
         self.fused_std = 0.0
         self.weight_gps = self.weight_baro = self.weight_radar = 0.0
         self._stale: set[str] = set()
-        self.stuck_checks = {name: StuckCheck(p.stuck_samples) for name in self.aid} \
-            if p.fault_detection and p.stuck_samples > 0 else {}
-        """Each source's check for a stuck reading (fault layer; none without)."""
-        self.gnss_still = StillReceiver()
-        """The GNSS's heights over its current run of vertical speeds reading 0."""
         self._publish()
 
     def propagate(self, dt: float) -> None:
@@ -267,8 +255,6 @@ class YangFusionKF(Estimator):
         """Gate and store the new heights, fuse them at a benchmark sample (eqs. 5-8), then
         one Kalman update (eqs. 12-14; also publishes the time update of :meth:`propagate`)."""
         now, p = self.clock.now, self.params
-        if self.stuck_checks:
-            samples = self._without_stuck(samples)
         arrived = self._new_heights(samples, now)
         benchmark = self._benchmark(now)
         heights = None
@@ -360,35 +346,11 @@ class YangFusionKF(Estimator):
                          quadratic_form(self.P, row) + self.params.R_gps_vz,
                          self.params.gate_sigma) is FUSED
 
-    def _without_stuck(self, samples):
-        """The samples without their stuck readings (:func:`~.stuck.refuse_stuck`); a
-        stream's sample left with none is dropped. GNSS readings repeated while the
-        receiver holds still (:meth:`_gnss_at_rest`) are only held."""
-        checks = self.stuck_checks
-        stuck = [(stream, name, source) for stream, sample in samples.items()
-                 for name, source, _ in stream.bounds if checks[source].stuck(sample[name])]
-        gps = samples.get(GPS_VZ)
-        if gps is not None:
-            self.gnss_still.sample(gps["gps_time"], gps["gps_h"], gps["gps_vz"])
-        if not stuck:
-            return samples
-        samples = dict(samples)
-        for stream, name, source in stuck:
-            remaining = {k: v for k, v in samples[stream].items() if k != name}
-            refuse_stuck(checks[source], self.aid[source], samples[stream][name], self.note,
-                         self._gnss_at_rest if stream is GPS_VZ else None)
-            if any(value in remaining for value in stream.values):
-                samples[stream] = remaining
-            else:
-                del samples[stream]
-        return samples
-
-    def _gnss_at_rest(self) -> bool:
-        """The GNSS receiver holds still (:class:`~.stuck.StillReceiver`): its vertical speed
-        reads exactly 0 and its heights since show no slope beyond the gate (never without
-        a gate)."""
+    def gnss_at_rest(self, sample) -> bool:
+        """The GNSS receiver holds still (:class:`~.stuck.StillReceiver`), judged with σ_GPS
+        against the gate (never without a gate)."""
         gate = self.params.gate_sigma
-        return gate > 0.0 and self.gnss_still.still(math.sqrt(self.params.R_gps), gate)
+        return gate > 0.0 and self.stuck.gnss_still.still(math.sqrt(self.params.R_gps), gate)
 
     def accelerometer_noise(self) -> float:
         """σ_a = √R_acc: its scatter checked with ``fault_detection``."""

@@ -1,0 +1,34 @@
+"""The parameters every estimator shares: health, sample timing and the fault layer's
+switches (:class:`HealthParams`)."""
+
+from dataclasses import dataclass
+
+from altfusion.estimators.stuck import stuck_samples_param
+from altfusion.params import param
+
+
+@dataclass(frozen=True)
+class HealthParams:
+    """The parameters every estimator shares (health and sample timing); each estimator's
+    parameters extend these."""
+
+    aiding_timeout: float = param(5.0, "s", "h_valid turns false when no height sample was "
+                                            "fused, or a required source (XuSHAEKF's acc) gave "
+                                            "none, for this long (PX4 EKF2: 5 s)", positive=True)
+    fault_detection: bool = param(True, None, "Height reset when every height source "
+                                              "disagrees and the isolation flags; false: the "
+                                              "paper's algorithm")
+    reset_timeout: float = param(2.5, "s", "A height source rejected this long while no "
+                                           "source is fused resets the height; rejected this "
+                                           "long while another is fused, it is isolated",
+                                 positive=True)
+    max_vz: float = param(50.0, "m/s", "Largest plausible vertical speed: bounds the jump of a "
+                                       "height between two samples where the estimator has "
+                                       "no speed state to predict it", positive=True)
+    max_sample_lead: float = param(1.0, "s", "A sample stamped at most this far ahead of the "
+                                             "estimator's clock is held until due; further: "
+                                             "refused (counted in <prefix>_rejected)", min=0.0)
+    max_sample_delay: float = param(3.0, "s", "A sample stamped more than this behind the "
+                                              "estimator's clock is stale: refused (counted in "
+                                              "<prefix>_rejected)", positive=True)
+    stuck_samples: int = stuck_samples_param()
