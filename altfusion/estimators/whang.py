@@ -273,8 +273,9 @@ class WhangGAEstimator(Estimator):
 
     def _measurement_update_with_baro_gate(self, air_data, gps) -> None:
         """The paper's measurement updates with the baro height gated first: while it is
-        rejected the GPS aids the height instead of calibrating the baro, and the last
-        accepted h^B is held (module documentation)."""
+        rejected (or isolated as stuck, its samples held back by the intake) the GPS aids
+        the height instead of calibrating the baro, and the last accepted h^B is held
+        (module documentation)."""
         for name, sample in (("baro", air_data), ("gps", gps)):
             if sample is not None:
                 self._interval(name, sample[f"{name}_time"])
@@ -283,6 +284,8 @@ class WhangGAEstimator(Estimator):
             self._baro_rejected = not self._gate_baro(air_data["baro_h"])
             if not self._baro_rejected:
                 self.baro = air_data["baro_h"]
+        elif self.aid["baro"].isolated:         # stuck: its samples are held back
+            self._baro_rejected = True
         if gps is not None and self._baro_rejected:
             self._gps_height_update(gps["gps_h"])
         elif gps is not None:
