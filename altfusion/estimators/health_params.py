@@ -3,7 +3,6 @@ switches (:class:`HealthParams`)."""
 
 from dataclasses import dataclass
 
-from altfusion.estimators.stuck import stuck_samples_param
 from altfusion.params import param
 
 
@@ -31,4 +30,7 @@ class HealthParams:
     max_sample_delay: float = param(3.0, "s", "A sample stamped more than this behind the "
                                               "estimator's clock is stale: refused (counted in "
                                               "<prefix>_rejected)", positive=True)
-    stuck_samples: int = stuck_samples_param()
+    stuck_samples: int = param(10, None, "A reading repeated bit for bit this many times in a "
+                                         "row (a frozen sensor, an unconnected input) is not "
+                                         "fused until it changes, with fault_detection (0: "
+                                         "off)", min=0)

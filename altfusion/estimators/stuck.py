@@ -28,14 +28,6 @@ import math
 from collections.abc import Callable, Iterable
 
 from altfusion.estimators.aid_source import AidSource
-from altfusion.params import param
-
-
-def stuck_samples_param() -> int:
-    """The ``stuck_samples`` parameter of an estimator with stuck checks (the fault layer)."""
-    return param(10, None, "A reading repeated bit for bit this many times in a row (a frozen "
-                           "sensor, an unconnected input) is not fused until it changes, with "
-                           "fault_detection (0: off)", min=0)
 
 
 class StuckCheck:
