@@ -399,16 +399,10 @@ class AltitudeEKF(Estimator):
         self._adapt_motion_noise()
         self._publish()
 
-    def gnss_at_rest(self, sample) -> bool:
-        """The GNSS receiver holds still (:class:`~altfusion.estimators.stuck.StillReceiver`):
-        its vertical speed reads exactly 0 and its heights since the speed first read 0
-        show no slope beyond the gate, judged with the GNSS height noise of this
-        ``sample``. Never without a gate."""
-        gate = self.params.gate_sigma
-        if gate <= 0.0:
-            return False
-        sigma = math.sqrt(self._noise_variance("gps", self._gps_sigma(sample)))
-        return self.stuck.gnss_still.still(sigma, gate)
+    def gnss_height_sigma(self, sample) -> float:
+        """The GNSS height noise of this ``sample``: its VDOP- and satellite-scaled σ, with
+        the noise check's factor."""
+        return math.sqrt(self._noise_variance("gps", self._gps_sigma(sample)))
 
     def _update_range_aid(self) -> None:
         """The conditional range aid decided for this step: the terrain held while it is

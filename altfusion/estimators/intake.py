@@ -6,7 +6,7 @@ value beyond its plausibility bound (:data:`~.streams.PLAUSIBLE_RANGE`) is rejec
 source's. With ``fault_detection`` a reading repeated bit for bit ``stuck_samples`` times
 in a row (:mod:`~altfusion.estimators.stuck`) is left out of its sample (the sample dropped
 when none of its measured values is left), its source refused and isolated, or, a GNSS
-reading while the receiver holds still (:meth:`SampleIntake.gnss_at_rest`), only held. An
+reading while the receiver holds still (:meth:`SampleIntake._gnss_at_rest`), only held. An
 auxiliary value (the air temperature beside the baro height) outside its
 plausible interval (:data:`~.streams.PLAUSIBLE_AUXILIARY`) is left out of the sample, which is
 fused without it (the estimator reads it with ``sample.get``); each counts in ``n_ignored``,
@@ -114,7 +114,7 @@ class SampleIntake:
                        ) -> dict[Stream, dict[str, float]]:
         """``samples`` without their stuck readings (:func:`~.stuck.refuse_stuck`): each
         left out of its sample, a sample left without a measured value dropped; a GNSS
-        reading repeated while the receiver holds still (:meth:`gnss_at_rest`) only held."""
+        reading repeated while the receiver holds still (:meth:`_gnss_at_rest`) only held."""
         stuck = self.stuck
         checks = stuck.checks
         now = self.clock.now
@@ -130,7 +130,7 @@ class SampleIntake:
         samples = dict(samples)
         for stream, name, source in found:
             sample = samples[stream]
-            at_rest = partial(self.gnss_at_rest, sample) if stream.gnss_speed else None
+            at_rest = partial(self._gnss_at_rest, sample) if stream.gnss_speed else None
             check = checks[source]
             if refuse_stuck(check, self.aid[source], sample[name], self.note, at_rest) and \
                     self.started and check.since <= self._started_at:
@@ -142,11 +142,20 @@ class SampleIntake:
                 del samples[stream]
         return samples
 
-    def gnss_at_rest(self, sample: dict[str, float]) -> bool:
-        """The GNSS receiver of this ``sample`` holds still (its vertical speed reads
-        exactly 0 and its heights show no climb: :class:`~.stuck.StillReceiver`), judged
-        with the estimator's GNSS height noise; False (the default) where it cannot tell."""
-        return False
+    def _gnss_at_rest(self, sample: dict[str, float]) -> bool:
+        """The GNSS receiver of this ``sample`` holds still: its vertical speed reads exactly
+        0 and its heights since it first did show no slope beyond the gate
+        (:class:`~.stuck.StillReceiver`), judged with :meth:`gnss_height_sigma`. Never
+        without a gate."""
+        gate = self.params.gate_sigma
+        return gate > 0.0 and self.stuck.gnss_still.still(self.gnss_height_sigma(sample), gate)
+
+    def gnss_height_sigma(self, sample: dict[str, float]) -> float:
+        """The noise (1σ, m) the estimator takes for this GNSS ``sample``'s height: the
+        static-hold test judges the heights' slope with it. Only asked of an estimator whose
+        GNSS stream carries the vertical speed."""
+        raise NotImplementedError(f"{type(self).__name__} reads the GNSS vertical speed and "
+                                  f"must give gnss_height_sigma")
 
     def _new_sample(self, stream: Stream, count: int, now: float) -> dict[str, float] | None:
         """The sample of ``stream``, whose count changed to ``count``, if it is valid, finite,

@@ -284,7 +284,7 @@ class WhangGAEstimator(Estimator):
             self._baro_rejected = not self._gate_baro(air_data["baro_h"])
             if not self._baro_rejected:
                 self.baro = air_data["baro_h"]
-        elif self.aid["baro"].isolated:         # stuck: its samples are held back
+        elif self.aid["baro"].isolated:     # and silent: stuck, its samples held back
             self._baro_rejected = True
         if gps is not None and self._baro_rejected:
             self._gps_height_update(gps["gps_h"])

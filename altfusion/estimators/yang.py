@@ -346,11 +346,9 @@ class YangFusionKF(Estimator):
                          quadratic_form(self.P, row) + self.params.R_gps_vz,
                          self.params.gate_sigma) is FUSED
 
-    def gnss_at_rest(self, sample) -> bool:
-        """The GNSS receiver holds still (:class:`~.stuck.StillReceiver`), judged with σ_GPS
-        against the gate (never without a gate)."""
-        gate = self.params.gate_sigma
-        return gate > 0.0 and self.stuck.gnss_still.still(math.sqrt(self.params.R_gps), gate)
+    def gnss_height_sigma(self, sample) -> float:
+        """σ_GPS (Section 3.2's R_gps)."""
+        return math.sqrt(self.params.R_gps)
 
     def accelerometer_noise(self) -> float:
         """σ_a = √R_acc: its scatter checked with ``fault_detection``."""
