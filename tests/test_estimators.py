@@ -88,8 +88,9 @@ def test_a_failed_stream_is_noted_once_per_second_and_counted_at_every_sample():
     e.take_notes()
     for _ in range(300):
         feeder.step(**baro_gps(baro=math.nan))
-    for k in range(300):
-        feeder.step(**baro_gps(baro=baro[k % 2], gps=1100.0 if (k + 1) % 10 == 0 else None))
+    for k in range(300):            # the GPS too changes by 1 mm: repeated it would be stuck
+        gps = 1100.0 + 0.001 * (k // 10 % 2) if (k + 1) % 10 == 0 else None
+        feeder.step(**baro_gps(baro=baro[k % 2], gps=gps))
     notes = e.take_notes()
     baro = [n for n in notes if "baro: non-finite sample ignored" in n]
     gps = [n for n in notes if "gps: sample rejected" in n]

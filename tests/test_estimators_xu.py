@@ -234,8 +234,9 @@ def test_strong_tracking_inflates_the_motion_states_not_the_baro_error():
 
 def test_samples_equal_to_the_prediction_do_not_divide_by_zero():
     """Noise-free constant inputs make every innovation exactly 0, so α_C = 0 in eq. (18):
-    the weight is 1 (α_C ≤ c), not c/0."""
-    estimator = XuSHAEKF(step_size=0.01)
+    the weight is 1 (α_C ≤ c), not c/0. The paper's code path (``fault_detection`` false):
+    the fault layer takes readings repeated bit for bit for stuck sensors and fuses none."""
+    estimator = XuSHAEKF(XuSHAEKF.Params(fault_detection=False), step_size=0.01)
     feeder = StreamFeeder(estimator)
     for _ in range(300):
         feeder.step(acc={"acc_z": 0.0}, baro={"baro_h": 100.0}, gps={"gps_h": 100.0})

@@ -399,6 +399,10 @@ class AltitudeEKF(Estimator):
         self._adapt_motion_noise()
         self._publish()
 
+    def baro_height_sigma(self) -> float:
+        """The baro height noise, with the noise check's factor."""
+        return math.sqrt(self._noise_variance("baro", self.sensor_noise["baro"]))
+
     def gnss_height_sigma(self, sample) -> float:
         """The GNSS height noise of this ``sample``: its VDOP- and satellite-scaled σ, with
         the noise check's factor."""

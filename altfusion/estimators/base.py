@@ -93,6 +93,7 @@ class Estimator(SampleIntake, Gating, Component):
         super().__init_subclass__(**kwargs)
         if "streams" in cls.__dict__:
             cls.gnss_speed_stream = next((s for s in cls.streams if s.gnss_speed), None)
+            cls.baro_stream = next((s for s in cls.streams if s.prefix == "baro"), None)
             for index, source in enumerate(cls.sources()):
                 setattr(cls, f"{source}_test_ratio", _source_output(index, "test_ratio"))
                 setattr(cls, f"{source}_rejected", _source_output(index, "rejected"))

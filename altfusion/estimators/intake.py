@@ -6,7 +6,8 @@ value beyond its plausibility bound (:data:`~.streams.PLAUSIBLE_RANGE`) is rejec
 source's. With ``fault_detection`` a reading repeated bit for bit ``stuck_samples`` times
 in a row (:mod:`~altfusion.estimators.stuck`) is left out of its sample (the sample dropped
 when none of its measured values is left), its source refused and isolated, or, a GNSS
-reading while the receiver holds still (:meth:`SampleIntake._gnss_at_rest`), only held. An
+reading while the receiver may hold still (the baro shows no climb:
+:meth:`SampleIntake._gnss_at_rest`), only held. An
 auxiliary value (the air temperature beside the baro height) outside its
 plausible interval (:data:`~.streams.PLAUSIBLE_AUXILIARY`) is left out of the sample, which is
 fused without it (the estimator reads it with ``sample.get``); each counts in ``n_ignored``,
@@ -31,8 +32,13 @@ from functools import partial
 from typing import ClassVar
 
 from altfusion.estimators.health import STEP_BITS
-from altfusion.estimators.streams import Stream
-from altfusion.estimators.stuck import StuckReadings, refuse_stuck
+from altfusion.estimators.streams import GNSS, Stream
+from altfusion.estimators.stuck import (
+    MOTION_WINDOW,
+    VEHICLE_MOVING,
+    StuckReadings,
+    refuse_stuck,
+)
 
 
 class SampleIntake:
@@ -45,6 +51,9 @@ class SampleIntake:
     gnss_speed_stream: ClassVar[Stream | None] = None
     """The stream carrying the GNSS's heights and vertical speed, if any (set with
     ``streams``: a class attribute, never part of a saved state)."""
+    baro_stream: ClassVar[Stream | None] = None
+    """The baro's stream, if any (set with ``streams``): its heights tell whether the vehicle
+    climbs while a GNSS reading repeats."""
 
     def declare_inputs(self) -> None:
         """Every stream input and extra input at its default (before any is given)."""
@@ -123,6 +132,8 @@ class SampleIntake:
         gnss = samples.get(self.gnss_speed_stream) if self.gnss_speed_stream else None
         if gnss is not None:
             stuck.gnss_still.sample(gnss["gps_time"], gnss["gps_h"], gnss["gps_vz"])
+        if stuck.gnss is not None:
+            self._watch_baro(samples)
         if not found:
             stuck.found = ()
             return samples
@@ -130,7 +141,7 @@ class SampleIntake:
         samples = dict(samples)
         for stream, name, source in found:
             sample = samples[stream]
-            at_rest = partial(self._gnss_at_rest, sample) if stream.gnss_speed else None
+            at_rest = partial(self._gnss_at_rest, sample) if source in GNSS else None
             check = checks[source]
             if refuse_stuck(check, self.aid[source], sample[name], self.note, at_rest) and \
                     self.started and check.since <= self._started_at:
@@ -142,13 +153,50 @@ class SampleIntake:
                 del samples[stream]
         return samples
 
+    def _watch_baro(self, samples: dict[Stream, dict[str, float]]) -> None:
+        """Follow the baro's heights while a GNSS reading repeats (:meth:`_gnss_at_rest`):
+        from its first repetition on, in runs of :data:`~.stuck.MOTION_WINDOW` while they
+        show no motion (a climb after a long rest is not averaged away), restarted when the
+        GNSS's readings change; a stuck baro shows nothing."""
+        stuck = self.stuck
+        run = stuck.baro_run
+        speed = stuck.gnss_speed
+        if stuck.gnss.repeats == 0 and (speed is None or speed.repeats == 0):
+            if run.n:
+                run.restart()
+            return
+        baro = samples.get(self.baro_stream)
+        if baro is None or stuck.checks["baro"].repeats >= stuck.checks["baro"].limit:
+            return
+        t = baro["baro_time"]
+        if run.n and t - run.t0 >= MOTION_WINDOW and not self._climbing():
+            run.restart()
+        run.add(t, baro["baro_h"])
+
+    def _climbing(self) -> bool:
+        """The baro's heights since a GNSS reading first repeated climb or descend faster
+        than :data:`~.stuck.VEHICLE_MOVING`, beyond their noise at the gate (judged with
+        :meth:`baro_height_sigma`)."""
+        return self.stuck.baro_run.moving(self.baro_height_sigma(), self.params.gate_sigma,
+                                          VEHICLE_MOVING)
+
     def _gnss_at_rest(self, sample: dict[str, float]) -> bool:
-        """The GNSS receiver of this ``sample`` holds still: its vertical speed reads exactly
-        0 and its heights since it first did show no slope beyond the gate
-        (:class:`~.stuck.StillReceiver`), judged with :meth:`gnss_height_sigma`. Never
-        without a gate."""
+        """The GNSS receiver of this ``sample``, whose reading repeats, holds still: the
+        baro's heights show no climb or descent (:meth:`_climbing`); and, with the vertical
+        speed, it reads exactly 0 and the receiver's heights since it first did show no
+        slope beyond the gate (:class:`~.stuck.StillReceiver`, judged with
+        :meth:`gnss_height_sigma`). A receiver in static hold repeats its height only while
+        the vehicle does not move; one that repeats it under a climb is stuck, or its input
+        unconnected. Never without a gate."""
         gate = self.params.gate_sigma
-        return gate > 0.0 and self.stuck.gnss_still.still(self.gnss_height_sigma(sample), gate)
+        if gate <= 0.0 or self._climbing():
+            return False
+        return self.gnss_speed_stream is None or \
+            self.stuck.gnss_still.still(self.gnss_height_sigma(sample), gate)
+
+    def baro_height_sigma(self) -> float:
+        """The noise (1σ, m) the estimator takes for a baro height: √R_baro."""
+        return math.sqrt(self.params.R_baro)
 
     def gnss_height_sigma(self, sample: dict[str, float]) -> float:
         """The noise (1σ, m) the estimator takes for this GNSS ``sample``'s height: the

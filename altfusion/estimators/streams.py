@@ -17,6 +17,10 @@ accelerometers) is a clipped reading (PX4's PX4Accelerometer counts a raw sample
 of the range as clipping): the true acceleration lies somewhere beyond it, so the reading is
 no measurement of it."""
 
+GNSS = ("gps", "gps_vz")
+"""The GNSS receiver's sources: a repeated reading of theirs may be a receiver holding still
+(:mod:`~altfusion.estimators.stuck`)."""
+
 PLAUSIBLE_RANGE = {"acc_z": ("acc", ACC_CLIP), "gps_vz": ("gps_vz", 1000.0),
                    **{f"{source}_h": (source, 1e5) for source in HEIGHT_SOURCES}}
 """Plausibility bounds of the sample values (source charged, largest magnitude): the
@@ -61,8 +65,7 @@ class Stream:
     """(input, lowest, highest) of each value with a :data:`PLAUSIBLE_AUXILIARY` interval."""
     checked: tuple[tuple[str, str], ...] = field(init=False, repr=False)
     """(input, source) of each measured value the stuck check watches
-    (:mod:`~altfusion.estimators.stuck`): every one, but a GNSS's without its vertical speed,
-    which alone tells a receiver in static hold from a frozen one."""
+    (:mod:`~altfusion.estimators.stuck`): every one with a plausibility bound."""
     gnss_speed: bool = field(init=False, repr=False)
     """The stream carries the GNSS vertical speed (``gps_vz``)."""
 
@@ -77,8 +80,7 @@ class Stream:
         set_once("auxiliary", tuple((name, *PLAUSIBLE_AUXILIARY[name]) for name in self.values
                                     if name in PLAUSIBLE_AUXILIARY))
         set_once("gnss_speed", "gps_vz" in self.values)
-        set_once("checked", tuple((name, source) for name, source, _ in self.bounds
-                                  if self.gnss_speed or not source.startswith("gps")))
+        set_once("checked", tuple((name, source) for name, source, _ in self.bounds))
 
 
 BARO = Stream("baro", ("baro_h",))

@@ -20,14 +20,33 @@ since an unconnected value arrives with fresh stamps.
 A receiver at rest repeats itself too: u-blox's static hold (its integration manuals) keeps
 the position and sets the velocity to zero while it sees no movement, and PX4 SITL's GNSS
 reports a vertical speed of exactly 0.0 on the ground (measured in the pyulog sample log:
-gps_vz 0.0 for 9 s). :class:`StillReceiver` tells it from an unconnected 0 by the
-receiver's own heights over the run of zeros: a receiver that holds still does not climb.
+gps_vz 0.0 for 9 s). It does so only while the vehicle does not move, which the baro shows:
+its heights since a GNSS reading first repeated, judged for a climb or descent
+(:class:`HeightSlope`, :data:`VEHICLE_MOVING`) in spans of :data:`MOTION_WINDOW`. A
+repeated GNSS reading under no such climb is held (not fused: a repetition adds no
+information), neither refused nor isolated; under a climb it is stuck. A vertical speed
+reading exactly 0 is also judged by the receiver's own heights over the run of zeros
+(:class:`StillReceiver`): a receiver that holds still does not climb.
 """
 
 import math
 from collections.abc import Callable, Iterable
 
 from altfusion.estimators.aid_source import AidSource
+
+VEHICLE_MOVING = 0.05
+"""The slowest climb or descent (m/s) the baro's heights must show, beyond their scatter, for a
+repeated GNSS height to be stuck rather than held by a receiver at rest: seven times the
+fastest drift of a baro at rest (a strong weather front, ~3 hPa/h ≈ 25 m/h ≈ 0.007 m/s), so
+that a receiver in static hold through a long wait on the ground is not taken for a stuck
+one."""
+
+
+MOTION_WINDOW = 10.0
+"""The span (s) of the baro's heights judged at once for motion while the GNSS height
+repeats: the run starts afresh after each span that shows none, so that a climb after a
+long wait on the ground shows within about one span (a least-squares slope over a ten-minute
+rest and τ s of climb at r is only ~3rτ²/600², 0.05 m/s after 77 s of a 1 m/s climb)."""
 
 
 class StuckCheck:
@@ -54,45 +73,37 @@ class StuckCheck:
         return 0 < self.limit <= self.repeats
 
 
-class StillReceiver:
-    """Whether a GNSS receiver whose vertical speed reads exactly 0 holds still: the slope of
-    its heights over the run of zeros (least squares, from the run's first sample) lies
-    within ``gate`` standard deviations of 0 (:meth:`still`). An unconnected speed input
-    reads 0 while the receiver's heights climb or descend: 10 m/s over ten 1 Hz samples of
-    13 m noise is 7 standard deviations of the slope."""
+class HeightSlope:
+    """The least-squares slope of heights over a run of samples (times and heights taken
+    from the run's first sample, so that the sums do not cancel)."""
 
-    __slots__ = ("t0", "n", "sum_t", "sum_tt", "sum_h", "sum_th")
+    __slots__ = ("t0", "h0", "n", "sum_t", "sum_tt", "sum_h", "sum_th", "sum_hh")
 
     def __init__(self) -> None:
         self.restart()
 
     def restart(self) -> None:
-        """Forget the run (its speed read other than 0)."""
-        self.t0 = 0.0
+        """Forget the run."""
+        self.t0 = self.h0 = 0.0
         self.n = 0
-        self.sum_t = self.sum_tt = self.sum_h = self.sum_th = 0.0
+        self.sum_t = self.sum_tt = self.sum_h = self.sum_th = self.sum_hh = 0.0
 
-    def sample(self, t: float, h: float, vz: float) -> None:
-        """A GNSS sample of time ``t``, height ``h`` and vertical speed ``vz``: the run goes
-        on while ``vz`` reads exactly 0 and restarts when it does not. Times are taken from
-        the run's first sample, so that the sums do not cancel."""
-        if vz != 0.0:
-            if self.n:
-                self.restart()
-            return
+    def add(self, t: float, h: float) -> None:
+        """The height ``h`` at time ``t``."""
         if self.n == 0:
-            self.t0 = t
+            self.t0, self.h0 = t, h
         t -= self.t0
+        h -= self.h0
         self.n += 1
         self.sum_t += t
         self.sum_tt += t * t
         self.sum_h += h
         self.sum_th += t * h
+        self.sum_hh += h * h
 
     def still(self, sigma: float, gate: float) -> bool:
-        """The heights' slope b over the run and its variance σ²·n/D (σ the heights' noise,
-        D = nΣt² - (Σt)²): True if b² ≤ gate²·Var b; False with fewer than two instants
-        (so also while the speed does not read 0)."""
+        """The slope b over the run and its variance σ²·n/D (σ the heights' noise,
+        D = nΣt² - (Σt)²): True if b² ≤ gate²·Var b; False with fewer than two instants."""
         n = self.n
         spread = n * self.sum_tt - self.sum_t * self.sum_t
         if n < 2 or spread <= 0.0:
@@ -100,17 +111,62 @@ class StillReceiver:
         slope = (n * self.sum_th - self.sum_t * self.sum_h) / spread
         return slope * slope * spread <= gate * gate * sigma * sigma * n and math.isfinite(slope)
 
+    def moving(self, sigma: float, gate: float, floor: float) -> bool:
+        """The heights climb or descend: their slope b is faster than ``floor`` and beyond
+        ``gate`` standard deviations of 0, Var b = s²/Sₜₜ with s² the larger of the
+        heights' noise ``sigma``² and their scatter about the line (RSS/(n - 2), from three
+        samples: a noise stated too small does not make a rest look like a climb). False
+        with fewer than two instants."""
+        n = self.n
+        s_tt = self.sum_tt - self.sum_t * self.sum_t / n if n > 1 else 0.0
+        if not s_tt > 0.0:
+            return False
+        s_th = self.sum_th - self.sum_t * self.sum_h / n
+        slope = s_th / s_tt
+        if not abs(slope) > floor:
+            return False
+        variance = sigma * sigma
+        if n > 2:
+            rss = self.sum_hh - self.sum_h * self.sum_h / n - slope * s_th
+            variance = max(variance, rss / (n - 2))
+        return slope * slope * s_tt > gate * gate * variance
+
+
+class StillReceiver(HeightSlope):
+    """Whether a GNSS receiver whose vertical speed reads exactly 0 holds still: the slope of
+    its heights over the run of zeros (least squares, from the run's first sample) lies
+    within ``gate`` standard deviations of 0 (:meth:`still`). An unconnected speed input
+    reads 0 while the receiver's heights climb or descend: 10 m/s over ten 1 Hz samples of
+    13 m noise is 7 standard deviations of the slope."""
+
+    __slots__ = ()
+
+    def sample(self, t: float, h: float, vz: float) -> None:
+        """A GNSS sample of time ``t``, height ``h`` and vertical speed ``vz``: the run goes
+        on while ``vz`` reads exactly 0 and restarts when it does not."""
+        if vz != 0.0:
+            if self.n:
+                self.restart()
+            return
+        self.add(t, h)
+
 
 class StuckReadings:
     """The fault layer's stuck check of an estimator's readings
     (:meth:`~altfusion.estimators.intake.SampleIntake.due_samples`): a :class:`StuckCheck` per
-    source, the GNSS's :class:`StillReceiver`, and the sources found stuck in the last step."""
+    source, the GNSS's :class:`StillReceiver`, the baro's heights over the GNSS height's
+    run of repetitions, and the sources found stuck in the last step."""
 
-    __slots__ = ("checks", "gnss_still", "found")
+    __slots__ = ("checks", "gnss", "gnss_speed", "gnss_still", "baro_run", "found")
 
     def __init__(self, sources: Iterable[str], limit: int) -> None:
         self.checks = {source: StuckCheck(limit) for source in sources}
+        self.gnss = self.checks.get("gps")
+        self.gnss_speed = self.checks.get("gps_vz")
+        """The GNSS height's check (None without a GNSS)."""
         self.gnss_still = StillReceiver()
+        self.baro_run = HeightSlope()
+        """The baro's heights since a GNSS reading first repeated (:data:`VEHICLE_MOVING`)."""
         self.found: tuple[str, ...] = ()
         """The sources whose reading was stuck in the last step."""
 
@@ -129,8 +185,8 @@ def refuse_stuck(check: StuckCheck, source: AidSource, reading: float,
     if at_rest is not None and not source.isolated and at_rest():
         if check.repeats == check.limit:
             note(f"{name}: the same reading {reading:.6g} {check.limit + 1} times in a row "
-                 f"with the vertical speed at 0: the receiver holds still (static hold); not "
-                 f"fused while it repeats, not a fault")
+                 f"while the vehicle does not climb: the receiver holds still (static hold); "
+                 f"not fused while it repeats, not a fault")
         return False
     found = check.repeats == check.limit or not source.isolated
     if found:
