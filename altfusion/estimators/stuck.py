@@ -174,13 +174,13 @@ class StuckReadings:
 def refuse_stuck(check: StuckCheck, source: AidSource, reading: float,
                  note: Callable[[str], None], at_rest: Callable[[], bool] | None = None) -> bool:
     """What becomes of ``reading`` of ``source``, found stuck by ``check`` (not to be fused):
-    a GNSS reading repeated while ``at_rest`` (the receiver holds still:
-    :class:`StillReceiver`) is only held; any other is refused (counted) and, when it
-    sticks, ``source`` is isolated (a failed sensor, until a changed reading passes its gate)
-    and ``note`` told. Its first ``limit`` repetitions were fused before they could be told
-    from readings: its bias window and last fusion are forgotten then (it vouches for no
-    prediction in the bias test). True if it is found stuck now (its run began at
-    ``check.since``)."""
+    a GNSS reading repeated while ``at_rest`` (the receiver may hold still: the baro shows
+    no climb, :class:`HeightSlope`; a speed of 0, :class:`StillReceiver`) is only held; any
+    other is refused (counted) and, when it sticks, ``source`` is isolated (a failed sensor,
+    until a changed reading passes its gate) and ``note`` told. Its first ``limit``
+    repetitions were fused before they could be told from readings: its bias window and
+    last fusion are forgotten then (it vouches for no prediction in the bias test). True if
+    it is found stuck now (its run began at ``check.since``)."""
     name = source.name
     if at_rest is not None and not source.isolated and at_rest():
         if check.repeats == check.limit:
