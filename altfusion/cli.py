@@ -31,7 +31,7 @@ INTERRUPTED = 130
 def command_run(args: argparse.Namespace) -> int:
     from altfusion.health_events import format_events, health_events, write_events
     from altfusion.plotting import plot_results
-    from altfusion.summary import format_summary
+    from altfusion.summary import format_summary, format_warnings
 
     loaded = read_ssp(args.system)
     if args.fault is not None:
@@ -60,15 +60,19 @@ def command_run(args: argparse.Namespace) -> int:
         files.append(str(plot_results(results, out / f"{stem}.png", spec.name,
                                       spec.description)))
     events = health_events(results)
-    if events:
-        files.append(str(write_events(events, out / f"{stem}.events.csv")))
+    events_file = str(write_events(events, out / f"{stem}.events.csv")) if events else ""
+    warnings_file = str(results.warnings_to_text(out / f"{stem}.warnings.txt")) \
+        if results.warnings else ""
+    files += [name for name in (events_file, warnings_file) if name]
     print(f"{spec.name}: {spec.description}")
     print(f"simulated {results.time[0]:g} s to {results.time[-1]:g} s "
           f"({len(spec.components)} components, base step {spec.base_step:g} s)\n")
     if len(results.time) > 1:
         print(format_summary(results, spec.metrics))
     if events:
-        print(f"\n{format_events(events, files[-1])}")
+        print(f"\n{format_events(events, events_file)}")
+    if results.warnings:
+        print(f"\n{format_warnings(results.warnings, warnings_file)}")
     print(f"\nwrote {', '.join(files)}")
     if isinstance(failure, RunInterruptedError):
         print(f"error: {failure}, results so far written (marked {INCOMPLETE})",
@@ -128,6 +132,7 @@ def command_replay(args: argparse.Namespace) -> int:
     from altfusion.replay.compare import format_table, sample_counts
     from altfusion.replay.run import plan_replay, run_replay
     from altfusion.replay.ulog import LogReadError
+    from altfusion.summary import format_warnings
 
     out = output_folder(args.out)
     fmu_paths = {path.stem: path for path in Path(args.models).glob("*.fmu")}
@@ -158,18 +163,19 @@ def command_replay(args: argparse.Namespace) -> int:
     counts = ", ".join(f"{p} {n} of {expected.get(p, 0)}"
                        for p, n in sample_counts(replay.results).items() if expected.get(p))
     print(f"  samples delivered: {counts}")
-    for name, warnings in replay.results.warnings.items():
-        if name != "replay":
-            print(f"  {name}: {len(warnings)} warning(s), first: {warnings[0]}")
     print(f"\nFrom t = {replay.settle_time:.2f} s (5 s after the first GPS fix: offsets "
           f"learnt); heights in m, MSL. 'vs EKF2' at EKF2 samples: d = h - ekf_h, std = d in "
           f"a common datum (mean removed); GPS innov = gps_h - prior h; NIS over h_std² + "
           f"epv²; h-range = implied ground height, flat ground.\n")
     print(format_table(replay.reports))
     events = health_events(replay.results)
-    files = [*replay.files, write_events(events, out / f"{replay.spec.name}"
-                                                                   f".events.csv")]
+    files = [*replay.files, write_events(events, out / f"{replay.spec.name}.events.csv")]
     print(f"\n{format_events(events, str(files[-1]))}")
+    warnings = {name: kept for name, kept in replay.results.warnings.items()
+                if name != "replay"}
+    if warnings:
+        files.append(replay.results.warnings_to_text(out / f"{replay.spec.name}.warnings.txt"))
+        print(f"\n{format_warnings(warnings, str(files[-1]))}")
     print(f"\nwrote {', '.join(str(f) for f in files)}")
     return 0
 

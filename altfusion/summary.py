@@ -1,8 +1,8 @@
-"""Text summaries of a run: error metrics and the range of each recorded signal."""
+"""Text summaries of a run: error metrics, the range of each recorded signal, the warnings."""
 
 import numpy as np
 
-from altfusion.cosim.results import Results
+from altfusion.cosim.results import Results, Warnings
 from altfusion.health_events import status_names
 from altfusion.systems.spec import Metric
 
@@ -46,3 +46,14 @@ def status_words(values: np.ndarray) -> str:
             if name not in final]
     return (f"  final {' '.join(final) or 'none'}"
             + (f"; also seen {' '.join(seen)}" if seen else ""))
+
+
+def format_warnings(warnings: dict[str, Warnings], where: str = "") -> str:
+    """What each component logged as a warning (an estimator's notes: ignored, refused and
+    stuck samples, inputs outside their plausible range): how many, and the first; ``where``:
+    the file holding them all."""
+    held = f" (all in {where})" if where else ""
+    if not warnings:
+        return f"warnings: none{held}"
+    return "\n".join([f"warnings{held}:", *(f"  {name}: {kept.total}, first: {kept[0]}"
+                                            for name, kept in warnings.items())])

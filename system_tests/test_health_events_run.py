@@ -61,3 +61,19 @@ def test_the_summary_decodes_status_by_bit_name(baro_step_run):
     line = next(line for line in stdout.splitlines() if line.startswith("AltitudeEKF.status"))
     assert "final INITIALIZED BARO_REJECTED BARO_ISOLATED GPS_FUSED" in line
     assert line.endswith("also seen RANGE_AID BARO_FUSED")
+
+
+def test_the_estimators_notes_are_said_and_kept(baro_step_run):
+    """What each estimator logged (its notes: here the failed baro's rejections, one line a
+    second, and AltitudeEKF's range aid) is printed as a count and the first line, and
+    written whole, one line each after the estimator's name; before, `run` dropped them."""
+    out, stdout = baro_step_run
+    kept = out / "fault_flight+baro_step.warnings.txt"
+    assert f"warnings (all in {kept}):" in stdout
+    lines = kept.read_text().splitlines()
+    for estimator in ("BaselineKF", "YangFusionKF", "XuSHAEKF", "AltitudeEKF"):
+        written = [line.removeprefix(f"{estimator}: ") for line in lines
+                   if line.startswith(f"{estimator}: ")]
+        assert f"  {estimator}: {len(written)}, first: {written[0]}" in stdout.splitlines()
+        assert any("baro: sample rejected" in line for line in written), estimator
+    assert str(kept) in stdout.splitlines()[-1]

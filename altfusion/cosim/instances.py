@@ -14,7 +14,6 @@ import os
 import shutil
 import tempfile
 import zipfile
-from collections.abc import Sequence
 from ctypes import byref
 from dataclasses import dataclass, replace
 from operator import attrgetter
@@ -37,6 +36,7 @@ from fmpy.fmi2 import (
     fmi2ValueReference,
 )
 
+from altfusion.cosim.results import Warnings
 from altfusion.cosim.scratch import ScratchFolder
 from altfusion.params import coerce
 from altfusion.version import CORE_VERSION
@@ -89,17 +89,6 @@ class FmuInfo:
 
 
 _INFO_CACHE: dict[Path, FmuInfo] = {}
-
-MAX_WARNINGS = 10_000
-"""Warnings kept per instance and run; later ones are counted, not kept."""
-
-
-def _keep_warnings(kept: list[str], new: Sequence[str]) -> None:
-    room = MAX_WARNINGS - len(kept)
-    kept.extend(new[:max(room, 0)])
-    if len(new) > room:
-        kept[-1] = f"... {len(new) - room} more warnings not kept"
-
 
 def fmu_info(path: Path) -> FmuInfo:
     """Read (and cache) the modelDescription and our vendor annotation of an FMU."""
@@ -288,7 +277,7 @@ class FmuInstance:
         folder = _extracted_folder(info.path)
         router = _router()
         self.instance_name, self.messages = router.register(name)
-        self.warnings: list[str] = []
+        self.warnings = Warnings()
         self.fmu = FMU2Slave(guid=info.guid, unzipDirectory=folder,
                              modelIdentifier=info.model_name, instanceName=self.instance_name)
         try:
@@ -305,7 +294,7 @@ class FmuInstance:
 
         Warnings move to :attr:`warnings` (bounded to ``MAX_WARNINGS``)."""
         found = [m for s, m in self.messages if s >= 3]
-        _keep_warnings(self.warnings, [m for s, m in self.messages if 0 < s < 3])
+        self.warnings.keep([m for s, m in self.messages if 0 < s < 3])
         self.messages.clear()
         return found
 
@@ -445,7 +434,7 @@ class CoreInstance:
         self._by_ref = {v.value_reference: v for v in info.variables.values()}
         self.resources = str(Path(_extracted_folder(info.path)) / "resources")
         self.core = self.core_class()
-        self.warnings: list[str] = []
+        self.warnings = Warnings()
 
     def initialize(self, parameters: dict[str, Any], step_size: float, start_time: float,
                    stop_time: float) -> None:
@@ -511,7 +500,7 @@ class CoreInstance:
                              f"{error}") from error
         notes = core.take_notes()
         if notes:
-            _keep_warnings(self.warnings, notes)
+            self.warnings.keep(notes)
 
     def reset(self) -> None:
         self.core = self.core_class()

@@ -2,6 +2,7 @@
 
 import csv
 import io
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -9,16 +10,51 @@ import numpy as np
 
 from altfusion.atomic import write_text
 
+MAX_WARNINGS = 10_000
+"""Warnings kept per instance and run; later ones are counted, not kept."""
+
+
+class Warnings(list[str]):
+    """A component's warnings in a run: the first ``MAX_WARNINGS`` - 1 kept, and from there
+    on a last entry counting the ones not kept."""
+
+    def __init__(self, kept: Sequence[str] = ()) -> None:
+        super().__init__(kept)
+        self.dropped = 0
+
+    @property
+    def total(self) -> int:
+        """How many were logged."""
+        return len(self) - 1 + self.dropped if self.dropped else len(self)
+
+    def keep(self, new: Sequence[str]) -> None:
+        """Keep ``new`` while there is room, count the rest."""
+        if not self.dropped:
+            room = MAX_WARNINGS - len(self)
+            if len(new) <= room:
+                self.extend(new)
+                return
+            self.extend(new[:room - 1])
+            new = new[room - 1:]
+            self.append("")
+        self.dropped += len(new)
+        self[-1] = f"... {self.dropped} more warnings not kept"
+
+    def clear(self) -> None:
+        super().clear()
+        self.dropped = 0
+
 
 @dataclass
 class Results:
     """Time (s) and recorded signals; ``units`` maps each column to its unit ('' if none);
-    ``warnings`` holds what each component logged as a warning (ignored samples, outliers)."""
+    ``warnings`` holds what each component logged as a warning (ignored samples, outliers,
+    stuck sensors), by component."""
 
     time: np.ndarray
     columns: dict[str, np.ndarray]
     units: dict[str, str] = field(default_factory=dict)
-    warnings: dict[str, list[str]] = field(default_factory=dict)
+    warnings: dict[str, Warnings] = field(default_factory=dict)
 
     def __getitem__(self, name: str) -> np.ndarray:
         return self.columns[name]
@@ -38,6 +74,12 @@ class Results:
         for row in data:
             writer.writerow([repr(float(v)) for v in row])
         return write_text(Path(path), text.getvalue())
+
+    def warnings_to_text(self, path: Path) -> Path:
+        """Write every kept warning, one line each after its component's name, atomically;
+        return the path."""
+        lines = (f"{name}: {warning}" for name, kept in self.warnings.items() for warning in kept)
+        return write_text(Path(path), "".join(f"{line}\n" for line in lines))
 
     @classmethod
     def from_csv(cls, path: Path) -> "Results":

@@ -25,6 +25,7 @@ step that ended at the recorded time (a sample count an estimator saw, for ``alt
 timing``).
 """
 
+import copy
 import graphlib
 import math
 import os
@@ -427,7 +428,7 @@ class Simulation:
     def _results(self, times: np.ndarray, data: np.ndarray) -> Results:
         columns = {path: data[:, i] for i, (path, *_rest) in enumerate(self._recorded)}
         units = {path: unit for path, *_rest, unit in self._recorded}
-        warnings = {c.name: list(c.instance.warnings) for c in self._components
+        warnings = {c.name: copy.copy(c.instance.warnings) for c in self._components
                     if c.instance.warnings}
         return Results(times, columns, units, warnings)
 
