@@ -33,4 +33,5 @@ class HealthParams:
     stuck_samples: int = param(10, None, "A reading repeated bit for bit this many times in a "
                                          "row (a frozen sensor, an unconnected input) is not "
                                          "fused until it changes, with fault_detection (0: "
-                                         "off)", min=0)
+                                         "off, for noise-free simulated sensors, which repeat "
+                                         "themselves at rest)", min=0)
