@@ -77,3 +77,24 @@ def test_the_estimators_notes_are_said_and_kept(baro_step_run):
         assert f"  {estimator}: {len(written)}, first: {written[0]}" in stdout.splitlines()
         assert any("baro: sample rejected" in line for line in written), estimator
     assert str(kept) in stdout.splitlines()[-1]
+
+
+def test_a_campaign_run_re_run_alone_says_its_notes(ssp_files, tmp_path):
+    """`mc --run i`, the way to look into one run of a campaign, prints and writes its
+    components' warnings as `run` does (before, only its metrics and signal ranges)."""
+    def mc(*extra: str) -> str:
+        completed = subprocess.run(
+            [sys.executable, "-m", "altfusion.cli", "mc", str(ssp_files["fault_flight"]),
+             "--fault", "baro_step", "-n", "1", "--stop", "135", "--out", str(tmp_path),
+             *extra], capture_output=True, text=True, timeout=600, cwd=ROOT)
+        assert completed.returncode == 0, completed.stderr[-3000:]
+        return completed.stdout
+
+    mc()
+    stdout = mc("--run", "0")
+    kept = tmp_path / "rerun_00000.warnings.txt"
+    assert f"warnings (all in {kept}):" in stdout
+    assert any(line.startswith("  XuSHAEKF: ") and "baro: sample rejected" in line
+               for line in stdout.splitlines())
+    assert "XuSHAEKF: t = 130.0 s: baro: sample rejected" in kept.read_text()
+    assert "identical to run 0 of the campaign" in stdout

@@ -83,15 +83,18 @@ def command_mc(args: argparse.Namespace) -> int:
 def _rerun(args: argparse.Namespace, source, out: Path) -> int:
     from altfusion.cosim.ssp import read_ssp
     from altfusion.montecarlo.rerun import rerun
-    from altfusion.summary import format_summary
+    from altfusion.summary import format_summary, format_warnings
 
     result = rerun(source, args.run, _settings(args), out)
     record = result.record
-    csv = record.results.to_csv(out / f"rerun_{args.run:05d}.csv")
+    files = [record.results.to_csv(out / f"rerun_{args.run:05d}.csv")]
     seeds = ", ".join(f"{name} = {value}" for name, value in record.seeds.items()) or "none"
     print(f"run {args.run}: seeds {seeds}; {record.elapsed:.2f} s")
     print(format_summary(record.results, read_ssp(args.system).spec.metrics))
-    print(f"wrote {csv}")
+    if record.results.warnings:
+        files.append(record.results.warnings_to_text(out / f"rerun_{args.run:05d}.warnings.txt"))
+        print(f"\n{format_warnings(record.results.warnings, str(files[-1]))}")
+    print(f"wrote {', '.join(map(str, files))}")
     if result.identical is None:
         return 0
     if result.identical:
