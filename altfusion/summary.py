@@ -48,12 +48,9 @@ def status_words(values: np.ndarray) -> str:
             + (f"; also seen {' '.join(seen)}" if seen else ""))
 
 
-def format_warnings(warnings: dict[str, Warnings], where: str = "") -> str:
+def format_warnings(warnings: dict[str, Warnings], where: str) -> str:
     """What each component logged as a warning (an estimator's notes: ignored, refused and
     stuck samples, inputs outside their plausible range): how many, and the first; ``where``:
     the file holding them all."""
-    held = f" (all in {where})" if where else ""
-    if not warnings:
-        return f"warnings: none{held}"
-    return "\n".join([f"warnings{held}:", *(f"  {name}: {kept.total}, first: {kept[0]}"
-                                            for name, kept in warnings.items())])
+    lines = [f"  {name}: {kept.total}, first: {kept[0]}" for name, kept in warnings.items()]
+    return "\n".join([f"warnings (all in {where}):", *lines])

@@ -12,7 +12,12 @@ from altfusion.estimators.bao import BaoDriftEstimator
 from altfusion.estimators.baseline import BaselineKF
 from altfusion.estimators.hajiyev import HajiyevAdaptiveEstimator
 from altfusion.estimators.health import SourceBit, source_bit
-from altfusion.estimators.stuck import StillReceiver, StuckCheck
+from altfusion.estimators.stuck import (
+    VEHICLE_MOVING,
+    HeightSlope,
+    StillReceiver,
+    StuckCheck,
+)
 from altfusion.estimators.whang import WhangGAEstimator
 from altfusion.estimators.xu import XuSHAEKF
 from altfusion.estimators.yang import YangFusionKF
@@ -53,6 +58,26 @@ def test_a_receiver_is_still_while_its_heights_show_no_slope_beyond_the_gate():
     assert receiver.still(13.0, 5.0)
     receiver.sample(7.0, 100.0, 0.01)                # the speed reads other than 0
     assert receiver.n == 0 and not receiver.still(13.0, 5.0)
+
+
+def test_heights_move_when_their_slope_beats_the_floor_and_their_own_scatter():
+    """HeightSlope.moving, the baro's test of a climb while a GNSS reading repeats: 10 s of
+    50 Hz heights rising 0.1 m/s under 5 m noise (seed 1: least-squares slope 0.23 m/s, above
+    the floor) show no climb even judged with a stated noise of 1 mm: their scatter is taken
+    instead, and the slope's σ is then 5·√(12/(500·10²)) = 0.078 m/s, 5σ = 0.39 m/s (judged
+    with the 1 mm they would climb); a noise-free 1 m/s climb is one; a noise-free 0.04 m/s
+    creep, below the 0.05 m/s floor (a baro's drift at rest), is none; one sample is none."""
+    rng = np.random.default_rng(1)
+    cases = (("noisy", lambda t: 100.0 + 0.1 * t + 5.0 * rng.standard_normal(), False),
+             ("climb", lambda t: 100.0 + t, True), ("creep", lambda t: 100.0 + 0.04 * t, False))
+    for name, height, moving in cases:
+        run = HeightSlope()
+        for k in range(500):
+            run.add(0.02 * k, height(0.02 * k))
+        assert run.moving(0.001, 5.0, VEHICLE_MOVING) is moving, name
+    one = HeightSlope()
+    one.add(3.0, 100.0)
+    assert not one.moving(0.5, 5.0, VEHICLE_MOVING) and not one.still(0.5, 5.0)
 
 
 def gnss_at_rest(seconds: float, climb_after: float = math.inf, frozen_height: bool = False,

@@ -18,8 +18,8 @@ class Warnings(list[str]):
     """A component's warnings in a run: the first ``MAX_WARNINGS`` - 1 kept, and from there
     on a last entry counting the ones not kept."""
 
-    def __init__(self, kept: Sequence[str] = ()) -> None:
-        super().__init__(kept)
+    def __init__(self) -> None:
+        super().__init__()
         self.dropped = 0
 
     @property

@@ -7,11 +7,11 @@ source's. With ``fault_detection`` a reading repeated bit for bit ``stuck_sample
 in a row (:mod:`~altfusion.estimators.stuck`) is left out of its sample (the sample dropped
 when none of its measured values is left), its source refused and isolated, or, a GNSS
 reading while the receiver may hold still (the baro shows no climb:
-:meth:`SampleIntake._gnss_at_rest`), only held. An
-auxiliary value (the air temperature beside the baro height) outside its
-plausible interval (:data:`~.streams.PLAUSIBLE_AUXILIARY`) is left out of the sample, which is
-fused without it (the estimator reads it with ``sample.get``); each counts in ``n_ignored``,
-the first of a run is noted.
+:meth:`SampleIntake._gnss_at_rest`), only held. An auxiliary value (the air temperature
+beside the baro height) outside its plausible interval
+(:data:`~.streams.PLAUSIBLE_AUXILIARY`) is left out of the sample, which is fused without it
+(the estimator reads it with ``sample.get``); each counts in ``n_ignored``, the first of a
+run is noted.
 
 Time stamps. A sample stamped ahead of the estimator's clock is held until due: an engine
 that steps slow components first (ECOS) shows the estimator a 10 Hz GPS sample of t = 0.10 s

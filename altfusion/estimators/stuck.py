@@ -43,7 +43,7 @@ one."""
 
 
 MOTION_WINDOW = 10.0
-"""The span (s) of the baro's heights judged at once for motion while the GNSS height
+"""The span (s) of the baro's heights judged at once for motion while a GNSS reading
 repeats: the run starts afresh after each span that shows none, so that a climb after a
 long wait on the ground shows within about one span (a least-squares slope over a ten-minute
 rest and τ s of climb at r is only ~3rτ²/600², 0.05 m/s after 77 s of a 1 m/s climb)."""
@@ -101,15 +101,21 @@ class HeightSlope:
         self.sum_th += t * h
         self.sum_hh += h * h
 
-    def still(self, sigma: float, gate: float) -> bool:
-        """The slope b over the run and its variance σ²·n/D (σ the heights' noise,
-        D = nΣt² - (Σt)²): True if b² ≤ gate²·Var b; False with fewer than two instants."""
+    def _fit(self) -> tuple[float, float, float]:
+        """(b, Sₜₜ, Sₜₕ) of the run: the slope b = Sₜₕ/Sₜₜ, with Sₜₜ = Σt² - (Σt)²/n and
+        Sₜₕ = Σth - ΣtΣh/n (b is nan with fewer than two instants: Sₜₜ is 0)."""
         n = self.n
-        spread = n * self.sum_tt - self.sum_t * self.sum_t
-        if n < 2 or spread <= 0.0:
-            return False
-        slope = (n * self.sum_th - self.sum_t * self.sum_h) / spread
-        return slope * slope * spread <= gate * gate * sigma * sigma * n and math.isfinite(slope)
+        if n < 2:
+            return math.nan, 0.0, 0.0
+        s_tt = self.sum_tt - self.sum_t * self.sum_t / n
+        s_th = self.sum_th - self.sum_t * self.sum_h / n
+        return (s_th / s_tt if s_tt > 0.0 else math.nan), s_tt, s_th
+
+    def still(self, sigma: float, gate: float) -> bool:
+        """The slope b over the run lies within ``gate`` standard deviations of 0,
+        Var b = σ²/Sₜₜ (σ the heights' noise); False with fewer than two instants."""
+        slope, s_tt, _ = self._fit()
+        return slope * slope * s_tt <= gate * gate * sigma * sigma   # False for nan
 
     def moving(self, sigma: float, gate: float, floor: float) -> bool:
         """The heights climb or descend: their slope b is faster than ``floor`` and beyond
@@ -117,15 +123,11 @@ class HeightSlope:
         heights' noise ``sigma``² and their scatter about the line (RSS/(n - 2), from three
         samples: a noise stated too small does not make a rest look like a climb). False
         with fewer than two instants."""
-        n = self.n
-        s_tt = self.sum_tt - self.sum_t * self.sum_t / n if n > 1 else 0.0
-        if not s_tt > 0.0:
-            return False
-        s_th = self.sum_th - self.sum_t * self.sum_h / n
-        slope = s_th / s_tt
-        if not abs(slope) > floor:
+        slope, s_tt, s_th = self._fit()
+        if not abs(slope) > floor:                                      # False for nan
             return False
         variance = sigma * sigma
+        n = self.n
         if n > 2:
             rss = self.sum_hh - self.sum_h * self.sum_h / n - slope * s_th
             variance = max(variance, rss / (n - 2))
@@ -154,16 +156,17 @@ class StillReceiver(HeightSlope):
 class StuckReadings:
     """The fault layer's stuck check of an estimator's readings
     (:meth:`~altfusion.estimators.intake.SampleIntake.due_samples`): a :class:`StuckCheck` per
-    source, the GNSS's :class:`StillReceiver`, the baro's heights over the GNSS height's
-    run of repetitions, and the sources found stuck in the last step."""
+    source, the GNSS's :class:`StillReceiver`, the baro's heights while a GNSS reading
+    repeats, and the sources found stuck in the last step."""
 
     __slots__ = ("checks", "gnss", "gnss_speed", "gnss_still", "baro_run", "found")
 
     def __init__(self, sources: Iterable[str], limit: int) -> None:
         self.checks = {source: StuckCheck(limit) for source in sources}
         self.gnss = self.checks.get("gps")
-        self.gnss_speed = self.checks.get("gps_vz")
         """The GNSS height's check (None without a GNSS)."""
+        self.gnss_speed = self.checks.get("gps_vz")
+        """The GNSS vertical speed's check (None without one)."""
         self.gnss_still = StillReceiver()
         self.baro_run = HeightSlope()
         """The baro's heights since a GNSS reading first repeated (:data:`VEHICLE_MOVING`)."""
