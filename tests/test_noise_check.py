@@ -203,6 +203,39 @@ def test_a_stated_noise_is_never_deflated():
     assert checked(0.01, 2000).factor == 1.0
 
 
+def test_a_noise_as_stated_shows_itself_whole():
+    """100 000 innovations of a source as told: from its 20th pair on the upper bound of the
+    shown share w is below one half only if the mean of 20 χ² ratios is below 0.24 (χ²_20
+    below 4.8: 1.5·10⁻⁴), rarer with every pair after: nothing of it is taken as slow."""
+    check = NoiseCheck(AidSource("gps"), 100.0, 100.0)
+    for value in np.random.default_rng(4).standard_normal(100_000):
+        check.gated(value, check.factor, check.factor)
+        assert check.unshown() == 0.0
+
+
+def test_an_error_that_wanders_slowly_is_the_share_of_the_noise_its_samples_do_not_show():
+    """A GNSS at 5 Hz stated σ = 1.53 m: white 0.3 m on a Gauss-Markov error of 1.5 m and
+    120 s. Successive samples show w = (0.3² + 2·1.5²·(1 - e^(-0.2/120)))/1.53² = 0.042 of
+    the stated variance (window of 100 pairs: standard deviation 10 % of it); the bound
+    takes it x1.23 (199 degrees of freedom): unshown 1 - 2·1.23·0.042 = 0.90, within 0.03
+    (three standard deviations, 2·1.23·0.1·0.042 = 0.01). Stated 0.3 m (the white noise
+    alone): nothing unshown; a noise not stated: never."""
+    rng = np.random.default_rng(5)
+    decay = np.exp(-0.2 / 120.0)
+    slow, white, stated = 1.5 * rng.standard_normal(), 0.3, np.hypot(0.3, 1.5)
+    errors = []
+    for _ in range(3000):
+        slow = decay * slow + 1.5 * np.sqrt(1.0 - decay**2) * rng.standard_normal()
+        errors.append(slow + white * rng.standard_normal())
+    shown = (white**2 + 2.0 * 1.5**2 * (1.0 - decay)) / stated**2
+    for sigma, stated_noise, expected in ((stated, True, 1.0 - 2.0 * 1.23 * shown),
+                                          (white, True, 0.0), (stated, False, 0.0)):
+        check = NoiseCheck(AidSource("gps"), 100.0, 100.0, stated_noise)
+        for error in errors:
+            check.gated(error, sigma**2 * check.factor, sigma**2 * check.factor)
+        assert check.unshown() == pytest.approx(expected, abs=0.03)
+
+
 def test_altitude_ekf_told_nothing_is_as_accurate_and_honest_as_told_the_noise():
     """The hover with no noise stated (every ``<source>_noise`` 0: measured from typical
     starting values 4-35x off the sensors': baro 2 m for 0.5, GNSS 3 m for 0.3, laser 0.1 m

@@ -75,7 +75,9 @@ Deviations from PX4 EKF2 (reasons in docs/altitude_ekf.md):
 * the barometer's temperature error (whang2008) is the scale-factor state k, not a
   temperature model: ``baro_p`` and ``baro_T`` are read but not fused;
 * without an accelerometer, a motion model whose noise adapts to the innovations
-  (PX4 EKF2 always has its IMU).
+  (PX4 EKF2 always has its IMU);
+* the GNSS's slowly varying error (``gps_slow_error``) added to ``h_std`` while the GNSS
+  defines the datum, a consider variance, not a state (:meth:`_datum_error`).
 """
 
 import math
@@ -161,6 +163,14 @@ class AltitudeEKFParams(HealthParams):
                                                "unknown baro)", min=0.0)
     terrain_psd: float = param(0.01, "m2/s", "PSD of the terrain-height random walk",
                                min=0.0)
+    gps_slow_error: float = param(0.0, "m", "The GNSS height's slowly varying error, 1σ, "
+                                            "beside gps_noise's white noise: its error over "
+                                            "minutes (atmosphere, multipath: a Gauss-Markov "
+                                            "error, GnssReceiver's gm_std) or an unknown "
+                                            "constant height bias. No number of samples "
+                                            "averages it away: while the GNSS defines the "
+                                            "datum (height_ref gps) its variance is added to "
+                                            "h_std (0: the GNSS's error is white)", min=0.0)
     gps_dop_scaling: bool = param(True, None, "Scale the GNSS height noise by VDOP and the "
                                               "satellite count (bao2017)")
     gps_vdop_ref: float = param(1.0, "1", "VDOP at which gps_noise holds: the GNSS noise is "
@@ -797,6 +807,28 @@ class AltitudeEKF(Estimator):
         if check is not None and check.rise > 1.0:
             inflate_along(self.P, self._datum_direction(), (check.rise - 1.0) * self.P[H][H])
 
+    def _datum_error(self) -> float:
+        """The variance of the datum's error that no sample shows, m², once the GNSS, the
+        height reference, has set the datum (0 else): ``gps_slow_error``², or, larger, the
+        share of the stated ``gps_noise``'s variance its successive innovations do not show
+        (:meth:`~altfusion.estimators.noise_check.NoiseCheck.unshown`: a datasheet's σ
+        stated for a receiver whose samples scatter far less). The filter takes the GNSS's
+        error as white, so averaging its samples makes the datum look ever more certain,
+        while the error of a real receiver's height wanders over minutes (its Gauss-Markov
+        part, correlation times of minutes to hours) and every sample of that time shares
+        it. It is added to ``h_std``, a consider variance in the sense of Schmidt's filter:
+        the estimate and the gains are unchanged. Deviation (PX4 EKF2 has none): not a
+        Gauss-Markov state, which would average the error down over flights much longer
+        than its correlation time while the baro holds the height; bounded above by its
+        full variance instead."""
+        if self._reference != "gps" or not self._reference_seen:
+            return 0.0
+        slow = self.params.gps_slow_error ** 2
+        check = self.noise_checks.get("gps")
+        if check is None:
+            return slow
+        return max(slow, check.unshown() * self.sensor_noise["gps"] ** 2)
+
     def reset_height(self, source: str, innovation: float, variance: float) -> None:
         """Height (or, for the GNSS speed, the speed) onto the sample; its variance the
         innovation's, its correlations zero (PX4's height and velocity resets). After a
@@ -815,7 +847,8 @@ class AltitudeEKF(Estimator):
     def _publish(self) -> None:
         x, P = self.x, self.P
         self.h_est, self.vz_est = x[H], x[V]
-        self.h_std = math.sqrt(max(P[H][H], 0.0)) if self.started else UNKNOWN_STD
+        self.h_std = math.sqrt(max(P[H][H], 0.0) + self._datum_error()) if self.started \
+            else UNKNOWN_STD
         self.vz_std = math.sqrt(max(P[V][V], 0.0))
         self.acc_bias = x[BA] if self._acc_used else 0.0
         self.baro_bias = x[D]

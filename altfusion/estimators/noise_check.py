@@ -95,7 +95,16 @@ the typical value:
 
 A stated noise is never deflated: a sensor whose errors are correlated in time (a GNSS)
 scatters less from sample to sample than its datasheet's σ, which is the honest figure for
-the filter.
+the filter. The check says how much less (:meth:`NoiseCheck.unshown`): the share of the
+stated variance that successive innovations do not show, judged against R alone as a noise
+not stated is (a prediction error shared by the two samples cancels in their difference,
+which S would count twice), 1 - 2·w with w the upper bound of the shown ratio's
+one-sided CONFIDENCE interval, from :data:`MIN_PAIRS` pairs on: 0 while the innovations
+show half the stated variance or more (a source as told practically always: w < 1/2 at 20
+pairs is χ² with 20 degrees of freedom below 4.8, 10⁻⁴, and rarer with every pair after),
+the whole statement in the limit. That share is an error the samples share over
+minutes, which averaging them does not reduce (AltitudeEKF: the GNSS datum's error,
+``gps_slow_error``).
 """
 
 import math
@@ -178,8 +187,8 @@ def lower_bound_factor(dof: int) -> float:
 class NoiseCheck:
     """The noise factor of one source: :attr:`factor` multiplies its stated variance R."""
 
-    __slots__ = ("source", "window", "maximum", "minimum", "stated", "ratio", "factor",
-                 "peak", "rise", "pairs", "_last")
+    __slots__ = ("source", "window", "maximum", "minimum", "stated", "ratio", "scatter",
+                 "factor", "peak", "rise", "pairs", "_last")
 
     def __init__(self, source: AidSource, window: float, maximum: float,
                  stated: bool = True) -> None:
@@ -195,6 +204,9 @@ class NoiseCheck:
         """Smallest factor on the variance."""
         self.ratio = 1.0
         """m: the windowed estimate of the true noise variance over the stated one."""
+        self.scatter = 1.0
+        """w: the windowed estimate of the variance successive samples show over the stated
+        one, judged against the samples' R (a stated noise's; :meth:`unshown`)."""
         self.factor = 1.0 if stated else UNSTATED_START
         """f: the factor on the stated variance in use."""
         self.peak = self.factor
@@ -206,8 +218,8 @@ class NoiseCheck:
         and what they taught the filter is that much less certain."""
         self.pairs = 0
         """n: the pairs of innovations taken so far."""
-        self._last: tuple[float, float] | None = None
-        """(y, S) of the source's previous gated sample; None after a reset."""
+        self._last: tuple[float, float, float] | None = None
+        """(y, S, R) of the source's previous gated sample; None after a reset."""
 
     def gated(self, innovation: float, variance: float, noise: float) -> None:
         """A sample of innovation y, variance S and noise variance R (both with the present
@@ -215,17 +227,22 @@ class NoiseCheck:
         previous one (a stated noise is judged against S, one not stated against R)."""
         self.rise = 1.0
         if self.stated:
-            pair = self._pair(innovation, variance, CLIP)
+            last = self._last
+            pair = self._pair(innovation, variance, CLIP, noise)
             if pair is None:
                 return
-            self.ratio += (pair * self.factor - self.ratio) / min(self.pairs, self.window)
+            pairs = min(self.pairs, self.window)
+            self.ratio += (pair * self.factor - self.ratio) / pairs
+            difference = innovation - last[0]
+            scatter = difference * difference * self.factor / (noise + last[2])
+            self.scatter += (min(scatter, CLIP) - self.scatter) / pairs
             self.factor = min(max(self.ratio, self.minimum), self.maximum)
             self.source.mark_inflated(self.factor > FLAGGED and self.pairs >= MIN_PAIRS)
             self.source.noisy = self.ratio > NOISY and self.pairs < self.window
         else:
             # against each sample's R without the factor (it changes from pair to pair while
             # the noise is measured), clipped as the stated pairs are against f·R
-            pair = self._pair(innovation, noise / self.factor, CLIP * self.factor)
+            pair = self._pair(innovation, noise / self.factor, CLIP * self.factor, noise)
             if pair is None:
                 return
             self.ratio += (pair - self.ratio) / min(self.pairs, self.window)
@@ -235,6 +252,14 @@ class NoiseCheck:
         told = self.factor if not self.stated else self._shown()
         if told > self.peak:
             self.rise, self.peak = told / self.peak, told
+
+    def unshown(self) -> float:
+        """The share of a stated noise's variance that successive innovations do not show
+        (module documentation): 1 - 2·w·k/χ²_k(1 - CONFIDENCE), from :data:`MIN_PAIRS`
+        pairs on, in [0, 1]; 0 for a noise not stated (measured, not stated)."""
+        if not self.stated or self.pairs < MIN_PAIRS:
+            return 0.0
+        return max(0.0, 1.0 - 2.0 * self.scatter * upper_bound_factor(self._dof()))
 
     def _dof(self) -> int:
         """k: the degrees of freedom of m, min(n, 2·window - 1) (the exponential window's
@@ -251,12 +276,13 @@ class NoiseCheck:
         bound = min(self.ratio * lower_bound_factor(self._dof()), self.factor)
         return bound if bound > FLAGGED else 1.0
 
-    def _pair(self, innovation: float, variance: float, clip: float) -> float | None:
+    def _pair(self, innovation: float, variance: float, clip: float, noise: float,
+              ) -> float | None:
         """(y_k - y_(k-1))² over the sum of the two samples' ``variance``, at most ``clip``,
         counted in :attr:`pairs`; None without a previous sample (or a variance that is not
-        a positive number)."""
+        a positive number). The sample's noise variance R is kept with it."""
         last = self._last
-        self._last = (innovation, variance)
+        self._last = (innovation, variance, noise)
         if last is None:
             return None
         total = variance + last[1]
