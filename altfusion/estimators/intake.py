@@ -131,7 +131,7 @@ class SampleIntake:
                  for name, source in stream.checked if checks[source].stuck(sample[name], now)]
         gnss = samples.get(self.gnss_speed_stream) if self.gnss_speed_stream else None
         if gnss is not None:
-            stuck.gnss_still.sample(gnss["gps_time"], gnss["gps_h"], gnss["gps_vz"])
+            self._watch_receiver(gnss)
         if stuck.gnss is not None:
             self._watch_baro(samples)
         if not found:
@@ -173,6 +173,17 @@ class SampleIntake:
             run.restart()
         run.add(t, baro["baro_h"])
 
+    def _watch_receiver(self, gnss: dict[str, float]) -> None:
+        """Follow the GNSS receiver's heights while its vertical speed reads exactly 0
+        (:class:`~.stuck.StillReceiver`), restarted when it reads other than 0."""
+        still = self.stuck.gnss_still
+        if gnss["gps_vz"] != 0.0:
+            if still.n:
+                still.restart()
+            return
+        still.sample(gnss["gps_time"], gnss["gps_h"], self.gnss_height_sigma(gnss),
+                     self.params.gate_sigma)
+
     def _climbing(self) -> bool:
         """The baro's heights since a GNSS reading first repeated climb or descend faster
         than :data:`~.stuck.VEHICLE_MOVING`, beyond their noise at the gate (judged with
@@ -183,11 +194,11 @@ class SampleIntake:
     def _gnss_at_rest(self, sample: dict[str, float]) -> bool:
         """The GNSS receiver of this ``sample``, whose reading repeats, holds still: the
         baro's heights show no climb or descent (:meth:`_climbing`); and, with the vertical
-        speed, it reads exactly 0 and the receiver's heights since it first did show no
-        slope beyond the gate (:class:`~.stuck.StillReceiver`, judged with
-        :meth:`gnss_height_sigma`). A receiver in static hold repeats its height only while
-        the vehicle does not move; one that repeats it under a climb is stuck, or its input
-        unconnected. Never without a gate."""
+        speed, the receiver's heights since it last read other than 0 show none either
+        (:class:`~.stuck.StillReceiver`, judged with :meth:`gnss_height_sigma`). A receiver
+        in static hold repeats its height only while the vehicle does not move; one that
+        repeats it under a climb is stuck, or its input unconnected. Never without a
+        gate."""
         gate = self.params.gate_sigma
         if gate <= 0.0 or self._climbing():
             return False

@@ -25,8 +25,12 @@ its heights since a GNSS reading first repeated, judged for a climb or descent
 (:class:`HeightSlope`, :data:`VEHICLE_MOVING`) in spans of :data:`MOTION_WINDOW`. A
 repeated GNSS reading under no such climb is held (not fused: a repetition adds no
 information), neither refused nor isolated; under a climb it is stuck. A vertical speed
-reading exactly 0 is also judged by the receiver's own heights over the run of zeros
-(:class:`StillReceiver`): a receiver that holds still does not climb.
+reading exactly 0 is also judged by the receiver's own heights over the run of zeros, in
+the same spans and by the same rule (:class:`StillReceiver`): a receiver that holds still
+does not climb. The rule's floor keeps a receiver's own wander from reading as a climb: its
+height error drifts by a metre or two over minutes (its Gauss-Markov part), which a noise
+measured from successive samples, a few centimetres on a smooth receiver, would otherwise
+take for motion beyond any gate.
 """
 
 import math
@@ -111,12 +115,6 @@ class HeightSlope:
         s_th = self.sum_th - self.sum_t * self.sum_h / n
         return (s_th / s_tt if s_tt > 0.0 else math.nan), s_tt, s_th
 
-    def still(self, sigma: float, gate: float) -> bool:
-        """The slope b over the run lies within ``gate`` standard deviations of 0,
-        Var b = σ²/Sₜₜ (σ the heights' noise); False with fewer than two instants."""
-        slope, s_tt, _ = self._fit()
-        return slope * slope * s_tt <= gate * gate * sigma * sigma   # False for nan
-
     def moving(self, sigma: float, gate: float, floor: float) -> bool:
         """The heights climb or descend: their slope b is faster than ``floor`` and beyond
         ``gate`` standard deviations of 0, Var b = s²/Sₜₜ with s² the larger of the
@@ -135,22 +133,28 @@ class HeightSlope:
 
 
 class StillReceiver(HeightSlope):
-    """Whether a GNSS receiver whose vertical speed reads exactly 0 holds still: the slope of
-    its heights over the run of zeros (least squares, from the run's first sample) lies
-    within ``gate`` standard deviations of 0 (:meth:`still`). An unconnected speed input
-    reads 0 while the receiver's heights climb or descend: 10 m/s over ten 1 Hz samples of
-    13 m noise is 7 standard deviations of the slope."""
+    """Whether a GNSS receiver whose vertical speed reads exactly 0 holds still: its heights
+    over the run of zeros (least squares, from the run's first sample, in spans of
+    :data:`MOTION_WINDOW` while they show no motion) show no climb or descent, by the
+    baro's rule (:meth:`HeightSlope.moving` with :data:`VEHICLE_MOVING`). An unconnected
+    speed input reads 0 while the receiver's heights climb or descend: 10 m/s over ten 1 Hz
+    samples of 13 m noise is 7 standard deviations of the slope."""
 
     __slots__ = ()
 
-    def sample(self, t: float, h: float, vz: float) -> None:
-        """A GNSS sample of time ``t``, height ``h`` and vertical speed ``vz``: the run goes
-        on while ``vz`` reads exactly 0 and restarts when it does not."""
-        if vz != 0.0:
-            if self.n:
-                self.restart()
-            return
+    def sample(self, t: float, h: float, sigma: float, gate: float) -> None:
+        """A GNSS sample of time ``t`` and height ``h`` (noise ``sigma``) whose vertical
+        speed reads exactly 0: the run goes on, afresh once a span of it showed no motion
+        (``gate``)."""
+        if self.n and t - self.t0 >= MOTION_WINDOW and self.still(sigma, gate):
+            self.restart()
         self.add(t, h)
+
+    def still(self, sigma: float, gate: float) -> bool:
+        """The heights of the run show no climb or descent faster than
+        :data:`VEHICLE_MOVING` beyond ``gate`` standard deviations (with their noise
+        ``sigma`` or, larger, their scatter about the line); True with fewer than two."""
+        return not self.moving(sigma, gate, VEHICLE_MOVING)
 
 
 class StuckReadings:
