@@ -104,7 +104,9 @@ show half the stated variance or more (a source as told practically always: w < 
 pairs is χ² with 20 degrees of freedom below 4.8, 10⁻⁴, and rarer with every pair after),
 the whole statement in the limit. That share is an error the samples share over
 minutes, which averaging them does not reduce (AltitudeEKF: the GNSS datum's error,
-``gps_slow_error``).
+``gps_slow_error``). A noise not stated is read alike against its typical value, w being
+its measured ratio m: told nothing, the estimator assumes a typical receiver, whose
+typical σ is mostly such an error, unless its samples scatter as much.
 """
 
 import math
@@ -254,12 +256,13 @@ class NoiseCheck:
             self.rise, self.peak = told / self.peak, told
 
     def unshown(self) -> float:
-        """The share of a stated noise's variance that successive innovations do not show
-        (module documentation): 1 - 2·w·k/χ²_k(1 - CONFIDENCE), from :data:`MIN_PAIRS`
-        pairs on, in [0, 1]; 0 for a noise not stated (measured, not stated)."""
-        if not self.stated or self.pairs < MIN_PAIRS:
+        """The share of a stated noise's variance (of the typical one, for a noise not
+        stated) that successive innovations do not show (module documentation):
+        1 - 2·w·k/χ²_k(1 - CONFIDENCE), from :data:`MIN_PAIRS` pairs on, in [0, 1]."""
+        if self.pairs < MIN_PAIRS:
             return 0.0
-        return max(0.0, 1.0 - 2.0 * self.scatter * upper_bound_factor(self._dof()))
+        shown = self.scatter if self.stated else self.ratio
+        return max(0.0, 1.0 - 2.0 * shown * upper_bound_factor(self._dof()))
 
     def _dof(self) -> int:
         """k: the degrees of freedom of m, min(n, 2·window - 1) (the exponential window's
