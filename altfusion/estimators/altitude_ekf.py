@@ -288,6 +288,8 @@ class AltitudeEKF(Estimator):
         self._reference_rejected_since: float | None = None
         self._reference_sample = (0.0, 0.0, 1.0)       # its last rejected (z, stamp, σ)
         self._reference_seen = False
+        self._datum_variance = 0.0
+        """:meth:`_datum_error` after the last GNSS height sample (nothing else moves it)."""
         self.n_terrain_resets = 0
         self.motion_noise = MotionNoise(
             (*self._heights, self.aid["gps_vz"]), maximum_scale(p.accel_psd,
@@ -385,6 +387,7 @@ class AltitudeEKF(Estimator):
             instant = gps["gps_time"] - self.params.gps_delay
             if "gps_h" in gps:
                 self._fuse_height("gps", gps["gps_h"], instant, self._gps_sigma(gps))
+                self._datum_variance = self._datum_error()
             if self.started and "gps_vz" in gps:
                 self._fuse_speed(gps["gps_vz"], instant)
         baro = samples.get(BARO_ALL)
@@ -847,7 +850,7 @@ class AltitudeEKF(Estimator):
     def _publish(self) -> None:
         x, P = self.x, self.P
         self.h_est, self.vz_est = x[H], x[V]
-        self.h_std = math.sqrt(max(P[H][H], 0.0) + self._datum_error()) if self.started \
+        self.h_std = math.sqrt(max(P[H][H], 0.0) + self._datum_variance) if self.started \
             else UNKNOWN_STD
         self.vz_std = math.sqrt(max(P[V][V], 0.0))
         self.acc_bias = x[BA] if self._acc_used else 0.0
