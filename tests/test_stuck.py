@@ -372,8 +372,10 @@ def test_a_receiver_without_speed_holding_still_is_held_until_the_baro_shows_a_c
     assert any("gps: the same reading" in note and "stuck" in note for note in notes)
 
 
-def hovering_nmea_receiver(cls: type, with_speed: bool) -> tuple[list[str], int]:
-    """``cls`` (its defaults) hovering at 100 m for 120 s, fed a baro of 0.1 m noise at
+def hovering_nmea_receiver(cls: type, with_speed: bool, climb: float = 0.0,
+                           seconds: float = 120.0) -> tuple[list[str], int]:
+    """``cls`` (its defaults) hovering at 100 m for ``seconds`` (from 60 s on climbing at
+    ``climb``), fed a baro of 0.1 m noise at
     50 Hz, an accelerometer of 0.05 m/s² at 100 Hz and a smooth receiver's GNSS height at
     10 Hz: its error a Gauss-Markov wander of 0.3 m and 60 s under 2 cm of noise, read to
     0.1 m (NMEA GGA's resolution), so that a reading repeats for a second or more; its
@@ -383,19 +385,20 @@ def hovering_nmea_receiver(cls: type, with_speed: bool) -> tuple[list[str], int]
     feeder, rng = StreamFeeder(estimator), np.random.default_rng(1)
     decay = math.exp(-0.1 / 60.0)
     wander, notes, isolated = 0.3 * rng.standard_normal(), [], 0
-    for n in range(12_000):
+    for n in range(round(seconds / 0.01)):
+        h, vz = (100.0, 0.0) if n < 6000 else (100.0 + climb * (n - 6000) * 0.01, climb)
         samples = {"acc": {"acc_z": 0.05 * rng.standard_normal()}}
         if n % 2 == 0:
-            samples["baro"] = {"baro_h": 100.0 + 0.1 * rng.standard_normal(),
-                               "baro_p": 101325.0 * (1.0 - 2.25577e-5 * 100.0) ** 5.25588,
-                               "baro_T": 288.15 - 0.0065 * 100.0}
+            samples["baro"] = {"baro_h": h + 0.1 * rng.standard_normal(),
+                               "baro_p": 101325.0 * (1.0 - 2.25577e-5 * h) ** 5.25588,
+                               "baro_T": 288.15 - 0.0065 * h}
         if n % 10 == 0:
             wander = decay * wander + 0.3 * math.sqrt(1.0 - decay**2) * rng.standard_normal()
-            samples["gps"] = {"gps_h": round((100.0 + wander + 0.02 * rng.standard_normal())
+            samples["gps"] = {"gps_h": round((h + wander + 0.02 * rng.standard_normal())
                                              / 0.1) * 0.1,
                               "gps_vdop": 1.0, "gps_nsat": 10, "gps_fix": True}
             if with_speed:
-                samples["gps"]["gps_vz"] = round(0.05 * rng.standard_normal(), 2)
+                samples["gps"]["gps_vz"] = round(vz + 0.05 * rng.standard_normal(), 2)
         feeder.step(**samples)
         notes += [note for note in estimator.take_notes() if "gps" in note]
         isolated += bool(estimator.status & source_bit("gps", SourceBit.ISOLATED))
@@ -419,3 +422,21 @@ def test_a_smooth_quantized_receiver_hovering_is_held_not_stuck(cls, with_speed)
     assert not any("stuck" in note for note in height), height[:3]
     assert isolated == 0
     assert any("holds still" in note for note in height)
+
+
+@pytest.mark.parametrize("cls", [YangFusionKF, AltitudeEKF, BaselineKF])
+@pytest.mark.parametrize("with_speed", [False, True])
+@pytest.mark.parametrize("climb", [0.03, 0.1])
+def test_a_coarse_receiver_in_a_slow_climb_is_held_not_stuck(cls, with_speed, climb):
+    """The same receiver in a slow climb after a minute's hover: read to 0.1 m, it holds a
+    reading for a second or more while the baro (0.1 m at 50 Hz) shows the climb. A climb
+    that moved the height less than three of the receiver's steps (its smallest change
+    between readings) since the reading's first repetition is within what it may hold:
+    before, AltitudeEKF's height was found stuck in three of these twelve cases (isolated
+    for seconds each time); now held throughout, in every case. (AltitudeEKF told nothing
+    rejects this receiver's wander now and then against the centimetres it measures for its
+    noise: its gate isolates it for under a second, the gate's doing, bounded here at 1 s.)"""
+    notes, isolated = hovering_nmea_receiver(cls, with_speed, climb, 180.0)
+    height = [note for note in notes if "gps: the same reading" in note]
+    assert not any("stuck" in note for note in height), height[:3]
+    assert isolated <= 100

@@ -36,6 +36,7 @@ from altfusion.estimators.streams import GNSS, Stream
 from altfusion.estimators.stuck import (
     MOTION_WINDOW,
     VEHICLE_MOVING,
+    StuckCheck,
     StuckReadings,
     refuse_stuck,
 )
@@ -141,8 +142,8 @@ class SampleIntake:
         samples = dict(samples)
         for stream, name, source in found:
             sample = samples[stream]
-            at_rest = partial(self._gnss_at_rest, sample) if source in GNSS else None
             check = checks[source]
+            at_rest = partial(self._gnss_at_rest, sample, check) if source in GNSS else None
             if refuse_stuck(check, self.aid[source], sample[name], self.note, at_rest) and \
                     self.started and check.since <= self._started_at:
                 self.restart_without(source)
@@ -191,19 +192,30 @@ class SampleIntake:
         return self.stuck.baro_run.moving(self.baro_height_sigma(), self.params.gate_sigma,
                                           VEHICLE_MOVING)
 
-    def _gnss_at_rest(self, sample: dict[str, float]) -> bool:
-        """The GNSS receiver of this ``sample``, whose reading repeats, holds still: the
-        baro's heights show no climb or descent (:meth:`_climbing`); and, with the vertical
-        speed, the receiver's heights since it last read other than 0 show none either
-        (:class:`~.stuck.StillReceiver`, judged with :meth:`gnss_height_sigma`). A receiver
-        in static hold repeats its height only while the vehicle does not move; one that
-        repeats it under a climb is stuck, or its input unconnected. Never without a
-        gate."""
+    def _gnss_at_rest(self, sample: dict[str, float], check: StuckCheck) -> bool:
+        """The GNSS receiver of this ``sample``, whose reading (judged by ``check``) repeats,
+        holds still: the baro's heights show no climb or descent (:meth:`_climbing`); and,
+        with the vertical speed, the receiver's heights since it last read other than 0
+        show none either (:class:`~.stuck.StillReceiver`, judged with
+        :meth:`gnss_height_sigma`). A receiver in static hold repeats its height only while
+        the vehicle does not move; one that repeats it under a climb is stuck, or its input
+        unconnected. A climb that has moved the height less than the receiver's resolution
+        since the height's first repetition (:meth:`~.stuck.GnssCheck.hold`) does not count:
+        a receiver read to 0.1 m holds a reading for seconds in a slow climb. Never without
+        a gate."""
         gate = self.params.gate_sigma
-        if gate <= 0.0 or self._climbing():
+        if gate <= 0.0:
             return False
-        return self.gnss_speed_stream is None or \
-            self.stuck.gnss_still.still(self.gnss_height_sigma(sample), gate)
+        stuck = self.stuck
+        span = self.clock.now - check.since
+        hold = check.hold()
+        if self._climbing() and stuck.baro_run.moved(span) > hold:
+            return False
+        if self.gnss_speed_stream is None:
+            return True
+        receiver = stuck.gnss_still
+        return receiver.still(self.gnss_height_sigma(sample), gate) or \
+            receiver.moved(span) <= hold
 
     def baro_height_sigma(self) -> float:
         """The noise (1σ, m) the estimator takes for a baro height: √R_baro."""

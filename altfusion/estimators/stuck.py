@@ -24,7 +24,10 @@ gps_vz 0.0 for 9 s). It does so only while the vehicle does not move, which the 
 its heights since a GNSS reading first repeated, judged for a climb or descent
 (:class:`HeightSlope`, :data:`VEHICLE_MOVING`) in spans of :data:`MOTION_WINDOW`. A
 repeated GNSS reading under no such climb is held (not fused: a repetition adds no
-information), neither refused nor isolated; under a climb it is stuck. A vertical speed
+information), neither refused nor isolated; under a climb it is stuck, unless the climb
+has moved the height less than the receiver's resolution allows since the reading first
+repeated (:meth:`GnssCheck.hold`: a receiver read to 0.1 m holds a reading for seconds in
+a slow climb; an input that never changed gets no allowance). A vertical speed
 reading exactly 0 is also judged by the receiver's own heights over the run of zeros, in
 the same spans and by the same rule (:class:`StillReceiver`): a receiver that holds still
 does not climb. The rule's floor keeps a receiver's own wander from reading as a climb: its
@@ -76,6 +79,38 @@ class StuckCheck:
             self.last, self.repeats, self.since = value, 0, now
         return 0 < self.limit <= self.repeats
 
+    def hold(self) -> float:
+        """How far the height may move while a healthy sensor holds this reading, m: 0 (no
+        allowance; a GNSS height's: :meth:`GnssCheck.hold`)."""
+        return 0.0
+
+
+class GnssCheck(StuckCheck):
+    """A GNSS height's :class:`StuckCheck` that also learns the receiver's resolution: the
+    smallest change between two successive readings (NMEA GGA reads the height to 0.1 m; a
+    receiver read so holds its reading while the height moves less than a step)."""
+
+    __slots__ = ("resolution",)
+
+    def __init__(self, limit: int) -> None:
+        super().__init__(limit)
+        self.resolution = math.inf
+        """The smallest change seen between successive readings (inf: none yet)."""
+
+    def stuck(self, value: float, now: float = 0.0) -> bool:
+        last = self.last
+        if last is not None and value != last:
+            self.resolution = min(self.resolution, abs(value - last))
+        return super().stuck(value, now)
+
+    def hold(self) -> float:
+        """How far the height may move while a healthy receiver holds its reading, m: three
+        of its steps (a step of motion, and its own wander over the hold: a smooth receiver
+        read to 0.1 m, wandering 0.3 m over a minute, held a reading for 1.9 s of a
+        0.1 m/s climb, 0.23 m); 0 before any change was seen (a reading that never changed,
+        such as an unconnected input, gets no allowance)."""
+        return 3.0 * self.resolution if math.isfinite(self.resolution) else 0.0
+
 
 class HeightSlope:
     """The least-squares slope of heights over a run of samples (times and heights taken
@@ -114,6 +149,12 @@ class HeightSlope:
         s_tt = self.sum_tt - self.sum_t * self.sum_t / n
         s_th = self.sum_th - self.sum_t * self.sum_h / n
         return (s_th / s_tt if s_tt > 0.0 else math.nan), s_tt, s_th
+
+    def moved(self, span: float) -> float:
+        """How far the heights' slope carries them over ``span`` s, m (0 with fewer than two
+        instants)."""
+        slope = self._fit()[0]
+        return abs(slope) * span if slope == slope else 0.0
 
     def moving(self, sigma: float, gate: float, floor: float) -> bool:
         """The heights climb or descend: their slope b is faster than ``floor`` and beyond
@@ -166,7 +207,8 @@ class StuckReadings:
     __slots__ = ("checks", "gnss", "gnss_speed", "gnss_still", "baro_run", "found")
 
     def __init__(self, sources: Iterable[str], limit: int) -> None:
-        self.checks = {source: StuckCheck(limit) for source in sources}
+        self.checks = {source: GnssCheck(limit) if source == "gps" else StuckCheck(limit)
+                       for source in sources}
         self.gnss = self.checks.get("gps")
         """The GNSS height's check (None without a GNSS)."""
         self.gnss_speed = self.checks.get("gps_vz")
@@ -192,8 +234,9 @@ def refuse_stuck(check: StuckCheck, source: AidSource, reading: float,
     if at_rest is not None and not source.isolated and at_rest():
         if check.repeats == check.limit:
             note(f"{name}: the same reading {reading:.6g} {check.limit + 1} times in a row "
-                 f"while the vehicle does not climb: the receiver holds still (static hold); "
-                 f"not fused while it repeats, not a fault")
+                 f"while the vehicle does not climb past the receiver's resolution: the "
+                 f"receiver holds still (static hold, or a coarse reading); not fused while "
+                 f"it repeats, not a fault")
         return False
     found = check.repeats == check.limit or not source.isolated
     if found:
