@@ -206,7 +206,7 @@ def test_a_stated_noise_is_never_deflated():
 def test_a_noise_as_stated_shows_itself_whole():
     """100 000 innovations of a source as told: from its 20th pair on the upper bound of the
     shown share w is below one half only if the mean of 20 χ² ratios is below 0.24 (χ²_20
-    below 4.8: 1.5·10⁻⁴), rarer with every pair after: nothing of it is taken as slow."""
+    below 4.8: 2·10⁻⁴), rarer with every pair after: nothing of it is taken as slow."""
     check = NoiseCheck(AidSource("gps"), 100.0, 100.0)
     for value in np.random.default_rng(4).standard_normal(100_000):
         check.gated(value, check.factor, check.factor)

@@ -101,7 +101,7 @@ not stated is (a prediction error shared by the two samples cancels in their dif
 which S would count twice), 1 - 2·w with w the upper bound of the shown ratio's
 one-sided CONFIDENCE interval, from :data:`MIN_PAIRS` pairs on: 0 while the innovations
 show half the stated variance or more (a source as told practically always: w < 1/2 at 20
-pairs is χ² with 20 degrees of freedom below 4.8, 10⁻⁴, and rarer with every pair after),
+pairs is χ² with 20 degrees of freedom below 4.8, 2·10⁻⁴, and rarer with every pair after),
 the whole statement in the limit. That share is an error the samples share over
 minutes, which averaging them does not reduce (AltitudeEKF: the GNSS datum's error,
 ``gps_slow_error``). A noise not stated is read alike against its typical value, w being
