@@ -31,7 +31,7 @@ INTERRUPTED = 130
 def command_run(args: argparse.Namespace) -> int:
     from altfusion.health_events import format_events, health_events, write_events
     from altfusion.plotting import plot_results
-    from altfusion.summary import format_summary, format_warnings
+    from altfusion.summary import format_summary, write_warnings
 
     loaded = read_ssp(args.system)
     if args.fault is not None:
@@ -61,9 +61,9 @@ def command_run(args: argparse.Namespace) -> int:
                                       spec.description)))
     events = health_events(results)
     events_file = str(write_events(events, out / f"{stem}.events.csv")) if events else ""
-    warnings_file = str(results.warnings_to_text(out / f"{stem}.warnings.txt")) \
-        if results.warnings else ""
-    files += [name for name in (events_file, warnings_file) if name]
+    warnings = write_warnings(results, out / f"{stem}.warnings.txt")
+    files += [events_file] if events else []
+    files += [str(warnings[0])] if warnings else []
     print(f"{spec.name}: {spec.description}")
     print(f"simulated {results.time[0]:g} s to {results.time[-1]:g} s "
           f"({len(spec.components)} components, base step {spec.base_step:g} s)\n")
@@ -71,8 +71,8 @@ def command_run(args: argparse.Namespace) -> int:
         print(format_summary(results, spec.metrics))
     if events:
         print(f"\n{format_events(events, events_file)}")
-    if results.warnings:
-        print(f"\n{format_warnings(results.warnings, warnings_file)}")
+    if warnings:
+        print(f"\n{warnings[1]}")
     print(f"\nwrote {', '.join(files)}")
     if isinstance(failure, RunInterruptedError):
         print(f"error: {failure}, results so far written (marked {INCOMPLETE})",
@@ -132,7 +132,7 @@ def command_replay(args: argparse.Namespace) -> int:
     from altfusion.replay.compare import format_table, sample_counts
     from altfusion.replay.run import plan_replay, run_replay
     from altfusion.replay.ulog import LogReadError
-    from altfusion.summary import format_warnings
+    from altfusion.summary import write_warnings
 
     out = output_folder(args.out)
     fmu_paths = {path.stem: path for path in Path(args.models).glob("*.fmu")}
@@ -171,11 +171,11 @@ def command_replay(args: argparse.Namespace) -> int:
     events = health_events(replay.results)
     files = [*replay.files, write_events(events, out / f"{replay.spec.name}.events.csv")]
     print(f"\n{format_events(events, str(files[-1]))}")
-    warnings = {name: kept for name, kept in replay.results.warnings.items()
-                if name != "replay"}
+    warnings = write_warnings(replay.results, out / f"{replay.spec.name}.warnings.txt",
+                              leave_out=("replay",))        # the log's report, printed above
     if warnings:
-        files.append(replay.results.warnings_to_text(out / f"{replay.spec.name}.warnings.txt"))
-        print(f"\n{format_warnings(warnings, str(files[-1]))}")
+        files.append(warnings[0])
+        print(f"\n{warnings[1]}")
     print(f"\nwrote {', '.join(str(f) for f in files)}")
     return 0
 

@@ -1,8 +1,11 @@
 """Text summaries of a run: error metrics, the range of each recorded signal, the warnings."""
 
+from collections.abc import Collection
+from pathlib import Path
+
 import numpy as np
 
-from altfusion.cosim.results import Results, Warnings
+from altfusion.cosim.results import Results
 from altfusion.health_events import status_names
 from altfusion.systems.spec import Metric
 
@@ -48,9 +51,16 @@ def status_words(values: np.ndarray) -> str:
             + (f"; also seen {' '.join(seen)}" if seen else ""))
 
 
-def format_warnings(warnings: dict[str, Warnings], where: str) -> str:
-    """What each component logged as a warning (an estimator's notes: ignored, refused and
-    stuck samples, inputs outside their plausible range): how many, and the first; ``where``:
-    the file holding them all."""
-    lines = [f"  {name}: {kept.total}, first: {kept[0]}" for name, kept in warnings.items()]
-    return "\n".join([f"warnings (all in {where}):", *lines])
+def write_warnings(results: Results, path: Path, leave_out: Collection[str] = (),
+                   ) -> tuple[Path, str] | None:
+    """Write every warning of ``results`` to ``path`` (atomically) and return it with what
+    each component logged as a warning (an estimator's notes: ignored, refused and stuck
+    samples, inputs outside their plausible range): how many, and the first; the components
+    in ``leave_out`` (reported otherwise) are not summed up. None (nothing written) when the
+    others logged none."""
+    shown = {name: kept for name, kept in results.warnings.items() if name not in leave_out}
+    if not shown:
+        return None
+    written = results.warnings_to_text(path)
+    lines = [f"  {name}: {kept.total}, first: {kept[0]}" for name, kept in shown.items()]
+    return written, "\n".join([f"warnings (all in {written}):", *lines])

@@ -54,9 +54,11 @@ def test_a_datasheet_noise_over_a_slowly_wandering_error_is_the_datum_s_uncertai
     """Told the receiver's σ as a datasheet gives it (√(0.3² + 1.5²) = 1.53 m) the filter
     takes it as white and averages it: before, |e| <= 2 h_std 28 % of the time (h_std
     0.28 m at the median, errors of 1.59 m RMS: the slow error's). Successive innovations
-    show a twentieth of that variance; the rest, 1.5 m again, is the datum's error, added
-    to h_std: covered at least 85 % (the lower bound of an honest estimate in the
-    evaluation; measured 94 %, h_std 1.47 m at the median)."""
+    show a twentieth of that variance; the rest is the datum's error, added to h_std:
+    covered at least 85 % (the lower bound of an honest estimate in the evaluation;
+    measured 94 %, h_std 1.47 m at the median). The error inferred is the datasheet's
+    variance less twice the shown share's bound, √(1.53²·(1 - 2·1.23·0.042)) = 1.45 m:
+    within 10 % of the true 1.5 m (the shown share's own spread, 10 %, moves it by 1 %)."""
     assert coverage(gps_noise=DATASHEET) >= 0.85
     datum = flight(0, gps_noise=DATASHEET)[1]
     assert math.sqrt(datum[-1]) == pytest.approx(SLOW, rel=0.1)

@@ -12,13 +12,7 @@ from altfusion.estimators.bao import BaoDriftEstimator
 from altfusion.estimators.baseline import BaselineKF
 from altfusion.estimators.hajiyev import HajiyevAdaptiveEstimator
 from altfusion.estimators.health import SourceBit, source_bit
-from altfusion.estimators.stuck import (
-    MOTION_WINDOW,
-    VEHICLE_MOVING,
-    HeightSlope,
-    StillReceiver,
-    StuckCheck,
-)
+from altfusion.estimators.stuck import MOTION_WINDOW, GnssCheck, HeightSlope, StuckCheck
 from altfusion.estimators.whang import WhangGAEstimator
 from altfusion.estimators.xu import XuSHAEKF
 from altfusion.estimators.yang import YangFusionKF
@@ -43,6 +37,20 @@ def test_a_noisy_quantized_reading_is_never_stuck_and_a_limit_of_zero_is_off():
     assert not any(off.stuck(0.0) for _ in range(100))
 
 
+def test_a_gnss_check_allows_three_of_the_receiver_s_steps_once_it_has_seen_one():
+    """GnssCheck.hold: a reading that never changed (an unconnected input) gets no
+    allowance; a receiver read to 0.1 m, whose smallest change between readings is 0.1 m,
+    may hold a reading over 0.3 m of motion."""
+    check = GnssCheck(3)
+    for value in (0.0, 0.0, 0.0, 0.0):
+        check.stuck(value)
+    assert check.hold() == 0.0
+    for value in (100.0, 100.3, 100.1, 100.1, 100.2):
+        check.stuck(value)
+    assert check.hold() == pytest.approx(0.3)
+    assert StuckCheck(3).hold() == 0.0
+
+
 def test_a_receiver_is_still_while_its_heights_show_no_motion():
     """The slope of ten 1 Hz heights of 13 m noise has a standard deviation of
     13/√82.5 = 1.43 m/s: a 5σ gate holds 7.2 m/s; 10 m/s is beyond it, a constant and
@@ -53,27 +61,28 @@ def test_a_receiver_is_still_while_its_heights_show_no_motion():
     for climb, sigma, period, still in ((0.0, 13.0, 1.0, True), (1.0, 13.0, 1.0, True),
                                         (10.0, 13.0, 1.0, False), (0.03, 0.01, 0.1, True),
                                         (0.3, 0.01, 0.1, False)):
-        receiver = StillReceiver()
+        receiver = HeightSlope()
         for k in range(10):
-            receiver.sample(1000.0 + period * k, 100.0 + climb * period * k, sigma, 5.0)
-        assert receiver.still(sigma, 5.0) is still, climb
-    receiver = StillReceiver()
-    receiver.sample(5.0, 100.0, 13.0, 5.0)
-    assert receiver.still(13.0, 5.0)
+            receiver.follow(1000.0 + period * k, 100.0 + climb * period * k, lambda s=sigma: s,
+                            5.0)
+        assert receiver.moving(sigma, 5.0) is not still, climb
+    receiver = HeightSlope()
+    receiver.follow(5.0, 100.0, lambda: 13.0, 5.0)
+    assert not receiver.moving(13.0, 5.0)
 
 
 def test_a_receiver_s_run_restarts_after_a_span_at_rest():
     """Ten minutes still at 1 Hz, then a climb of 1 m/s: judged over the whole run, its
     least-squares slope is 3·1·τ²/600² (0.05 m/s after 77 s); the run restarts after each
     span of MOTION_WINDOW at rest, so the climb shows within about one span."""
-    receiver = StillReceiver()
+    receiver = HeightSlope()
     t = 0.0
     while t < 600.0:
-        receiver.sample(t, 100.0, 0.01, 5.0)
+        receiver.follow(t, 100.0, lambda: 0.01, 5.0)
         t += 1.0
     assert receiver.t0 >= 600.0 - MOTION_WINDOW - 1.0
-    while receiver.still(0.01, 5.0):
-        receiver.sample(t, 100.0 + (t - 600.0), 0.01, 5.0)
+    while not receiver.moving(0.01, 5.0):
+        receiver.follow(t, 100.0 + (t - 600.0), lambda: 0.01, 5.0)
         t += 1.0
     assert t - 600.0 <= MOTION_WINDOW + 2.0
 
@@ -92,10 +101,10 @@ def test_heights_move_when_their_slope_beats_the_floor_and_their_own_scatter():
         run = HeightSlope()
         for k in range(500):
             run.add(0.02 * k, height(0.02 * k))
-        assert run.moving(0.001, 5.0, VEHICLE_MOVING) is moving, name
+        assert run.moving(0.001, 5.0) is moving, name
     one = HeightSlope()
     one.add(3.0, 100.0)
-    assert not one.moving(0.5, 5.0, VEHICLE_MOVING)
+    assert not one.moving(0.5, 5.0)
 
 
 def gnss_at_rest(seconds: float, climb_after: float = math.inf, frozen_height: bool = False,
@@ -433,10 +442,8 @@ def test_a_coarse_receiver_in_a_slow_climb_is_held_not_stuck(cls, with_speed, cl
     that moved the height less than three of the receiver's steps (its smallest change
     between readings) since the reading's first repetition is within what it may hold:
     before, AltitudeEKF's height was found stuck in three of these twelve cases (isolated
-    for seconds each time); now held throughout, in every case. (AltitudeEKF told nothing
-    rejects this receiver's wander now and then against the centimetres it measures for its
-    noise: its gate isolates it for under a second, the gate's doing, bounded here at 1 s.)"""
-    notes, isolated = hovering_nmea_receiver(cls, with_speed, climb, 180.0)
+    for seconds each time); now held throughout, in every case."""
+    notes, _ = hovering_nmea_receiver(cls, with_speed, climb, 180.0)
     height = [note for note in notes if "gps: the same reading" in note]
     assert not any("stuck" in note for note in height), height[:3]
-    assert isolated <= 100
+    assert any("holds still" in note for note in height)

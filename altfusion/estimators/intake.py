@@ -33,13 +33,7 @@ from typing import ClassVar
 
 from altfusion.estimators.health import STEP_BITS
 from altfusion.estimators.streams import GNSS, Stream
-from altfusion.estimators.stuck import (
-    MOTION_WINDOW,
-    VEHICLE_MOVING,
-    StuckCheck,
-    StuckReadings,
-    refuse_stuck,
-)
+from altfusion.estimators.stuck import StuckCheck, StuckReadings, refuse_stuck
 
 
 class SampleIntake:
@@ -155,10 +149,9 @@ class SampleIntake:
         return samples
 
     def _watch_baro(self, samples: dict[Stream, dict[str, float]]) -> None:
-        """Follow the baro's heights while a GNSS reading repeats (:meth:`_gnss_at_rest`):
-        from its first repetition on, in runs of :data:`~.stuck.MOTION_WINDOW` while they
-        show no motion (a climb after a long rest is not averaged away), restarted when the
-        GNSS's readings change; a stuck baro shows nothing."""
+        """Follow the baro's heights while a GNSS reading repeats (:meth:`_gnss_at_rest`),
+        from its first repetition on (restarted when the GNSS's readings change); a stuck
+        baro shows nothing."""
         stuck = self.stuck
         run = stuck.baro_run
         speed = stuck.gnss_speed
@@ -169,53 +162,40 @@ class SampleIntake:
         baro = samples.get(self.baro_stream)
         if baro is None or stuck.checks["baro"].repeats >= stuck.checks["baro"].limit:
             return
-        t = baro["baro_time"]
-        if run.n and t - run.t0 >= MOTION_WINDOW and not self._climbing():
-            run.restart()
-        run.add(t, baro["baro_h"])
+        run.follow(baro["baro_time"], baro["baro_h"], self.baro_height_sigma,
+                   self.params.gate_sigma)
 
     def _watch_receiver(self, gnss: dict[str, float]) -> None:
-        """Follow the GNSS receiver's heights while its vertical speed reads exactly 0
-        (:class:`~.stuck.StillReceiver`), restarted when it reads other than 0."""
-        still = self.stuck.gnss_still
+        """Follow the GNSS receiver's heights while its vertical speed reads exactly 0,
+        restarted when it reads other than 0."""
+        run = self.stuck.gnss_still
         if gnss["gps_vz"] != 0.0:
-            if still.n:
-                still.restart()
+            if run.n:
+                run.restart()
             return
-        still.sample(gnss["gps_time"], gnss["gps_h"], self.gnss_height_sigma(gnss),
-                     self.params.gate_sigma)
-
-    def _climbing(self) -> bool:
-        """The baro's heights since a GNSS reading first repeated climb or descend faster
-        than :data:`~.stuck.VEHICLE_MOVING`, beyond their noise at the gate (judged with
-        :meth:`baro_height_sigma`)."""
-        return self.stuck.baro_run.moving(self.baro_height_sigma(), self.params.gate_sigma,
-                                          VEHICLE_MOVING)
+        run.follow(gnss["gps_time"], gnss["gps_h"], partial(self.gnss_height_sigma, gnss),
+                   self.params.gate_sigma)
 
     def _gnss_at_rest(self, sample: dict[str, float], check: StuckCheck) -> bool:
         """The GNSS receiver of this ``sample``, whose reading (judged by ``check``) repeats,
-        holds still: the baro's heights show no climb or descent (:meth:`_climbing`); and,
-        with the vertical speed, the receiver's heights since it last read other than 0
-        show none either (:class:`~.stuck.StillReceiver`, judged with
-        :meth:`gnss_height_sigma`). A receiver in static hold repeats its height only while
-        the vehicle does not move; one that repeats it under a climb is stuck, or its input
-        unconnected. A climb that has moved the height less than the receiver's resolution
-        since the height's first repetition (:meth:`~.stuck.GnssCheck.hold`) does not count:
-        a receiver read to 0.1 m holds a reading for seconds in a slow climb. Never without
-        a gate."""
+        holds still: the baro's heights show no climb or descent (judged with
+        :meth:`baro_height_sigma`); and, with the vertical speed, the receiver's heights
+        since it last read other than 0 show none either (judged with
+        :meth:`gnss_height_sigma`): :meth:`~.stuck.HeightSlope.moving`. A receiver in static
+        hold repeats its height only while the vehicle does not move; one that repeats it
+        under a climb is stuck, or its input unconnected. A climb that has moved the height
+        less than the receiver's resolution since the reading's first repetition
+        (:meth:`~.stuck.StuckCheck.hold`) does not count: a receiver read to 0.1 m holds a
+        reading for seconds in a slow climb. Never without a gate."""
         gate = self.params.gate_sigma
         if gate <= 0.0:
             return False
-        stuck = self.stuck
-        span = self.clock.now - check.since
-        hold = check.hold()
-        if self._climbing() and stuck.baro_run.moved(span) > hold:
-            return False
-        if self.gnss_speed_stream is None:
-            return True
-        receiver = stuck.gnss_still
-        return receiver.still(self.gnss_height_sigma(sample), gate) or \
-            receiver.moved(span) <= hold
+        span, hold = self.clock.now - check.since, check.hold()
+        runs = [(self.stuck.baro_run, self.baro_height_sigma())]
+        if self.gnss_speed_stream is not None:
+            runs.append((self.stuck.gnss_still, self.gnss_height_sigma(sample)))
+        return not any(run.moving(sigma, gate) and run.moved(span) > hold
+                       for run, sigma in runs)
 
     def baro_height_sigma(self) -> float:
         """The noise (1σ, m) the estimator takes for a baro height: √R_baro."""

@@ -29,11 +29,12 @@ has moved the height less than the receiver's resolution allows since the readin
 repeated (:meth:`GnssCheck.hold`: a receiver read to 0.1 m holds a reading for seconds in
 a slow climb; an input that never changed gets no allowance). A vertical speed
 reading exactly 0 is also judged by the receiver's own heights over the run of zeros, in
-the same spans and by the same rule (:class:`StillReceiver`): a receiver that holds still
-does not climb. The rule's floor keeps a receiver's own wander from reading as a climb: its
-height error drifts by a metre or two over minutes (its Gauss-Markov part), which a noise
-measured from successive samples, a few centimetres on a smooth receiver, would otherwise
-take for motion beyond any gate.
+the same spans and by the same rule (:meth:`HeightSlope.follow`,
+:meth:`HeightSlope.moving`): a receiver that holds still does not climb. The rule's floor
+keeps a receiver's own wander from reading as a climb: its height error drifts by a metre
+or two over minutes (its Gauss-Markov part), which a noise measured from successive
+samples, a few centimetres on a smooth receiver, would otherwise take for motion beyond any
+gate.
 """
 
 import math
@@ -156,14 +157,14 @@ class HeightSlope:
         slope = self._fit()[0]
         return abs(slope) * span if slope == slope else 0.0
 
-    def moving(self, sigma: float, gate: float, floor: float) -> bool:
-        """The heights climb or descend: their slope b is faster than ``floor`` and beyond
-        ``gate`` standard deviations of 0, Var b = s²/Sₜₜ with s² the larger of the
-        heights' noise ``sigma``² and their scatter about the line (RSS/(n - 2), from three
-        samples: a noise stated too small does not make a rest look like a climb). False
-        with fewer than two instants."""
+    def moving(self, sigma: float, gate: float) -> bool:
+        """The heights climb or descend: their slope b is faster than :data:`VEHICLE_MOVING`
+        and beyond ``gate`` standard deviations of 0, Var b = s²/Sₜₜ with s² the larger of
+        the heights' noise ``sigma``² and their scatter about the line (RSS/(n - 2), from
+        three samples: a noise stated too small does not make a rest look like a climb).
+        False with fewer than two instants."""
         slope, s_tt, s_th = self._fit()
-        if not abs(slope) > floor:                                      # False for nan
+        if not abs(slope) > VEHICLE_MOVING:                             # False for nan
             return False
         variance = sigma * sigma
         n = self.n
@@ -172,37 +173,20 @@ class HeightSlope:
             variance = max(variance, rss / (n - 2))
         return slope * slope * s_tt > gate * gate * variance
 
-
-class StillReceiver(HeightSlope):
-    """Whether a GNSS receiver whose vertical speed reads exactly 0 holds still: its heights
-    over the run of zeros (least squares, from the run's first sample, in spans of
-    :data:`MOTION_WINDOW` while they show no motion) show no climb or descent, by the
-    baro's rule (:meth:`HeightSlope.moving` with :data:`VEHICLE_MOVING`). An unconnected
-    speed input reads 0 while the receiver's heights climb or descend: 10 m/s over ten 1 Hz
-    samples of 13 m noise is 7 standard deviations of the slope."""
-
-    __slots__ = ()
-
-    def sample(self, t: float, h: float, sigma: float, gate: float) -> None:
-        """A GNSS sample of time ``t`` and height ``h`` (noise ``sigma``) whose vertical
-        speed reads exactly 0: the run goes on, afresh once a span of it showed no motion
-        (``gate``)."""
-        if self.n and t - self.t0 >= MOTION_WINDOW and self.still(sigma, gate):
+    def follow(self, t: float, h: float, sigma: Callable[[], float], gate: float) -> None:
+        """The height ``h`` at time ``t`` joins the run, which starts afresh once a span of
+        :data:`MOTION_WINDOW` showed no motion (:meth:`moving`, the heights' noise
+        ``sigma()`` asked only then): a climb after a long rest is not averaged away."""
+        if self.n and t - self.t0 >= MOTION_WINDOW and not self.moving(sigma(), gate):
             self.restart()
         self.add(t, h)
-
-    def still(self, sigma: float, gate: float) -> bool:
-        """The heights of the run show no climb or descent faster than
-        :data:`VEHICLE_MOVING` beyond ``gate`` standard deviations (with their noise
-        ``sigma`` or, larger, their scatter about the line); True with fewer than two."""
-        return not self.moving(sigma, gate, VEHICLE_MOVING)
 
 
 class StuckReadings:
     """The fault layer's stuck check of an estimator's readings
     (:meth:`~altfusion.estimators.intake.SampleIntake.due_samples`): a :class:`StuckCheck` per
-    source, the GNSS's :class:`StillReceiver`, the baro's heights while a GNSS reading
-    repeats, and the sources found stuck in the last step."""
+    source, the GNSS receiver's heights while its vertical speed reads exactly 0, the baro's
+    heights while a GNSS reading repeats, and the sources found stuck in the last step."""
 
     __slots__ = ("checks", "gnss", "gnss_speed", "gnss_still", "baro_run", "found")
 
@@ -213,7 +197,10 @@ class StuckReadings:
         """The GNSS height's check (None without a GNSS)."""
         self.gnss_speed = self.checks.get("gps_vz")
         """The GNSS vertical speed's check (None without one)."""
-        self.gnss_still = StillReceiver()
+        self.gnss_still = HeightSlope()
+        """The GNSS receiver's heights while its vertical speed reads exactly 0: an
+        unconnected speed input reads 0 while they climb or descend (10 m/s over ten 1 Hz
+        samples of 13 m noise is 7 standard deviations of the slope)."""
         self.baro_run = HeightSlope()
         """The baro's heights since a GNSS reading first repeated (:data:`VEHICLE_MOVING`)."""
         self.found: tuple[str, ...] = ()
@@ -224,7 +211,8 @@ def refuse_stuck(check: StuckCheck, source: AidSource, reading: float,
                  note: Callable[[str], None], at_rest: Callable[[], bool] | None = None) -> bool:
     """What becomes of ``reading`` of ``source``, found stuck by ``check`` (not to be fused):
     a GNSS reading repeated while ``at_rest`` (the receiver may hold still: the baro shows
-    no climb, :class:`HeightSlope`; a speed of 0, :class:`StillReceiver`) is only held; any
+    no climb; a speed of 0, the receiver's heights show none: :class:`HeightSlope`) is
+    only held; any
     other is refused (counted) and, when it sticks, ``source`` is isolated (a failed sensor,
     until a changed reading passes its gate) and ``note`` told. Its first ``limit``
     repetitions were fused before they could be told from readings: its bias window and

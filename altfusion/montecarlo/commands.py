@@ -83,7 +83,7 @@ def command_mc(args: argparse.Namespace) -> int:
 def _rerun(args: argparse.Namespace, source, out: Path) -> int:
     from altfusion.cosim.ssp import read_ssp
     from altfusion.montecarlo.rerun import rerun
-    from altfusion.summary import format_summary, format_warnings
+    from altfusion.summary import format_summary, write_warnings
 
     result = rerun(source, args.run, _settings(args), out)
     record = result.record
@@ -91,9 +91,10 @@ def _rerun(args: argparse.Namespace, source, out: Path) -> int:
     seeds = ", ".join(f"{name} = {value}" for name, value in record.seeds.items()) or "none"
     print(f"run {args.run}: seeds {seeds}; {record.elapsed:.2f} s")
     print(format_summary(record.results, read_ssp(args.system).spec.metrics))
-    if record.results.warnings:
-        files.append(record.results.warnings_to_text(out / f"rerun_{args.run:05d}.warnings.txt"))
-        print(f"\n{format_warnings(record.results.warnings, str(files[-1]))}")
+    warnings = write_warnings(record.results, out / f"rerun_{args.run:05d}.warnings.txt")
+    if warnings:
+        files.append(warnings[0])
+        print(f"\n{warnings[1]}")
     print(f"wrote {', '.join(map(str, files))}")
     if result.identical is None:
         return 0
