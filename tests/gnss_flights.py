@@ -1,4 +1,4 @@
-"""A flight over a GNSS whose height error wanders slowly: one harness for
+"""Flights over a GNSS whose height error wanders slowly: the harnesses of
 ``tests/test_gnss_slow_error.py`` and ``benchmarks/gnss_slow_error.py``."""
 
 import math
@@ -70,3 +70,28 @@ def wave_flight(estimator, seed: int, seconds: float = 300.0, slow_std: float = 
             flight.heights.append(estimator.h_est)
             flight.valid.append(bool(estimator.h_valid))
     return flight
+
+
+def smooth_receiver_hover(estimator, seed: int, seconds: float = 120.0, slow_std: float = 0.5,
+                          tau: float = 30.0) -> tuple[int, float]:
+    """``estimator`` (a core, step 0.02 s) hovering at 100 m, fed a 0.1 m baro and an
+    accelerometer of 0.05 m/s² at 50 Hz and, at 10 Hz, a smooth receiver's GNSS height: a
+    Gauss-Markov error of ``slow_std`` and ``tau`` under 0.02 m of white noise, read to
+    0.1 m (NMEA GGA); seed ``seed``. Returns the GNSS samples rejected and the seconds its
+    ``status`` had it isolated."""
+    feed, rng = StreamFeeder(estimator), np.random.default_rng(seed)
+    decay = math.exp(-0.1 / tau)
+    slow = slow_std * rng.standard_normal()
+    isolated = 0
+    for n in range(round(seconds / 0.02)):
+        gps = None
+        if n % 5 == 0:
+            slow = decay * slow + slow_std * math.sqrt(1.0 - decay**2) * rng.standard_normal()
+            gps = {"gps_h": round((100.0 + slow + 0.02 * rng.standard_normal()) / 0.1) * 0.1,
+                   "gps_vdop": 1.0, "gps_nsat": 10, "gps_fix": True}
+        feed.step(baro={"baro_h": 100.0 + 0.1 * rng.standard_normal(), "baro_p": 100129.0,
+                        "baro_T": 287.5},
+                  acc={"acc_z": 0.05 * rng.standard_normal()}, gps=gps)
+        estimator.take_notes()
+        isolated += bool(estimator.status & estimator.aid["gps"].isolated_mask)
+    return estimator.aid["gps"].rejected, 0.02 * isolated

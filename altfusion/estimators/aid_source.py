@@ -26,7 +26,8 @@ its running sums stay finite."""
 
 class InnovationWindow:
     """A height source's innovations y and their variances S over a span of time, with
-    running sums: the mean ȳ = Σy/n and its variance ΣS/n² (independent samples)."""
+    running sums: the mean ȳ = Σy/n and its variance ΣS/n² + :attr:`shared` (independent
+    samples, but for the error they share)."""
 
     def __init__(self) -> None:
         self.samples: deque[tuple[float, float, float]] = deque()
@@ -34,6 +35,11 @@ class InnovationWindow:
         self.sum_S = 0.0
         self.sigmas = math.inf
         """The bias test's threshold for this source, set by each test (inf before)."""
+        self.shared = 0.0
+        """The variance of the error every sample in the window shares, m² (set by the
+        estimator: a slowly varying error its filter takes as white, which no number of
+        samples averages away; 0: the samples' errors are independent). Kept by
+        :meth:`clear`: it is the source's, not the window's."""
 
     @property
     def n(self) -> int:
@@ -63,7 +69,7 @@ class InnovationWindow:
 
     def mean_variance(self) -> float:
         n = len(self.samples)
-        return max(self.sum_S, 0.0) / (n * n)
+        return max(self.sum_S, 0.0) / (n * n) + self.shared
 
     def one_sided(self, min_samples: int) -> bool:
         """True if the window holds ``min_samples`` or more innovations, all of one sign (a
