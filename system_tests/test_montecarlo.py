@@ -347,3 +347,19 @@ def test_compare_refuses_an_estimator_lacking_an_output_a_metric_needs(fmus, tmp
     assert completed.returncode == 2
     assert ("VerticalDynamics has no output 'wind_speed', which error metric 'estimated "
             "wind' needs") in completed.stderr
+
+
+def test_a_fault_campaign_says_what_each_estimator_did_over_its_runs(ssp_files, tmp_path):
+    """``altfusion mc`` on the fault flight with a fault applied (its estimators' health
+    outputs recorded): after the metrics, in how many runs each estimator isolated the
+    GNSS that stepped by +6 m at 80 s and +100 m at 140 s, and every event in a CSV."""
+    out = tmp_path / "mc"
+    completed = subprocess.run(
+        cli("mc", str(ssp_files["fault_flight"]), "--fault", "gnss_step", "-n", "2",
+            "--stop", "160", "--workers", "1", "--quiet", "--out", str(out)),
+        capture_output=True, text=True, timeout=600)
+    assert completed.returncode == 0, completed.stderr
+    said = completed.stdout
+    assert "fault_flight+gnss_step: health events of 2 runs" in said
+    assert "  AltitudeEKF: " in said and "isolated gps 2/2 runs" in said
+    assert (out / "fault_flight+gnss_step.events.csv").is_file()

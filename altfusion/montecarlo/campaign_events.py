@@ -1,7 +1,8 @@
 """The health events (:mod:`altfusion.health_events`) of a campaign's stored runs: written to
 ``<campaign>/<name>.events.csv`` (one row per event, with its run) and said in a line per
 estimator: in how many runs it isolated, re-admitted, fell back, reset its height or lost
-its validity, and at what median time."""
+its validity, and at what median time. ``altfusion evaluate`` says them for each scenario,
+``altfusion mc`` and ``report`` for a campaign whose runs record an estimator's ``status``."""
 
 import statistics
 from pathlib import Path
@@ -13,6 +14,7 @@ from altfusion.health_events import (
     ISOLATED,
     READMITTED,
     HealthEvent,
+    estimators_in,
     health_events,
     write_events,
 )
@@ -20,6 +22,14 @@ from altfusion.montecarlo.storage import finished_runs, load_run
 
 NOTABLE = (ISOLATED, FALLBACK, READMITTED, HEIGHT_RESET, INVALID)
 """The events a campaign's summary counts (rejections and start-ups are in the CSV)."""
+NONE_NOTABLE = "no isolation, fallback, height reset or loss of validity in any run"
+
+
+def records_health(folder: Path) -> bool:
+    """True if the runs of the campaign in ``folder`` record an estimator's health outputs
+    (its ``status``; read off the first finished run): else they have no events to say."""
+    runs = finished_runs(folder)
+    return bool(runs) and bool(estimators_in(load_run(folder, runs[0]).results))
 
 
 def campaign_events(folder: Path) -> dict[int, list[HealthEvent]]:
@@ -36,9 +46,10 @@ def write_campaign_events(folder: Path, name: str,
     return write_events(events, Path(folder) / f"{name}.events.csv", {"run": runs})
 
 
-def summary_lines(by_run: dict[int, list[HealthEvent]]) -> list[str]:
-    """One line per estimator with a notable event: ``isolated baro 20/20 runs (median
-    132.5 s)``, each kind of event and source once, counted in runs (first time in each)."""
+def summary_rows(by_run: dict[int, list[HealthEvent]]) -> list[tuple[str, str]]:
+    """(estimator, its notable events: ``isolated baro 20/20 runs (median 132.5 s)``, each
+    kind of event and source once, counted in runs (first time in each)) for each estimator
+    with one."""
     firsts: dict[str, dict[tuple[str, str], list[float]]] = {}
     for events in by_run.values():
         seen: set[tuple[str, str, str]] = set()
@@ -48,14 +59,14 @@ def summary_lines(by_run: dict[int, list[HealthEvent]]) -> list[str]:
                 seen.add(key)
                 firsts.setdefault(event.estimator, {}).setdefault(
                     (event.what, event.source), []).append(event.time)
-    lines = []
+    rows = []
     for estimator, kinds in firsts.items():
         said = [f"{what} {source.replace('+', ', ')}".strip() + f" {len(times)}/{len(by_run)} "
                 f"runs (median {statistics.median(times):.1f} s)"
                 for (what, source), times in sorted(
                     kinds.items(), key=lambda item: statistics.median(item[1]))]
-        lines.append(f"  {estimator}: {'; '.join(said)}")
-    return lines
+        rows.append((estimator, "; ".join(said)))
+    return rows
 
 
 def report_campaign_events(folder: Path, name: str) -> tuple[str, Path]:
@@ -63,6 +74,11 @@ def report_campaign_events(folder: Path, name: str) -> tuple[str, Path]:
     written with all of them."""
     by_run = campaign_events(folder)
     path = write_campaign_events(folder, name, by_run)
-    lines = summary_lines(by_run) or ["  no isolation, fallback, height reset or loss of "
-                                      "validity in any run"]
-    return "\n".join([f"{name}: health events of {len(by_run)} runs"] + lines), path
+    return say_events(name, summary_rows(by_run), len(by_run)), path
+
+
+def say_events(name: str, rows: list[tuple[str, str]], runs: int) -> str:
+    """The :func:`summary_rows` of ``runs`` runs in words, a line per estimator, headed by
+    ``name``."""
+    lines = [f"  {estimator}: {said}" for estimator, said in rows] or [f"  {NONE_NOTABLE}"]
+    return "\n".join([f"{name}: health events of {runs} runs"] + lines)

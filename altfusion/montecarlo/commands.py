@@ -75,7 +75,9 @@ def command_mc(args: argparse.Namespace) -> int:
     outcome = run_campaign(source, out, _settings(args), _execution(args), resume=args.resume)
     status = _report_outcome(outcome, f"altfusion mc {args.system} --out {out} --resume")
     if outcome.finished:
-        print(format_statistics(aggregate(out)))
+        statistics = aggregate(out)
+        print(format_statistics(statistics))
+        _print_health(out, statistics.manifest["system"]["name"])
         print(f"plots and HTML report: altfusion report {out}")
     return status
 
@@ -105,7 +107,18 @@ def _rerun(args: argparse.Namespace, source, out: Path) -> int:
     return 1
 
 
+def _print_health(out: Path, name: str) -> None:
+    """What the estimators did over the campaign's runs (where they record their status),
+    and the CSV written with every event."""
+    from altfusion.montecarlo.campaign_events import records_health, report_campaign_events
+
+    if records_health(out):
+        text, path = report_campaign_events(out, name)
+        print(f"{text}\nevery event of every run: {path}")
+
+
 def command_report(args: argparse.Namespace) -> int:
+    from altfusion.montecarlo.campaign_events import say_events
     from altfusion.montecarlo.report import write_report
     from altfusion.montecarlo.tables import format_statistics
 
@@ -113,7 +126,11 @@ def command_report(args: argparse.Namespace) -> int:
     for index, reason in sorted(report.statistics.skipped.items()):
         print(f"skipped run {index}: {reason} (altfusion mc --resume re-runs it)")
     print(format_statistics(report.statistics))
-    print(f"wrote {report.html}, {report.summary} and {len(report.pngs)} plots")
+    if report.health is not None:
+        print(say_events(report.statistics.manifest["system"]["name"], report.health,
+                         len(report.statistics.runs)))
+    events = f", {report.events}" if report.events else ""
+    print(f"wrote {report.html}, {report.summary}{events} and {len(report.pngs)} plots")
     return 0
 
 

@@ -1,4 +1,5 @@
-"""``altfusion report DIR``: PNG plots, ``summary.json``, ``rms_vs_time.csv`` and one
+"""``altfusion report DIR``: PNG plots, ``summary.json``, ``rms_vs_time.csv``, the estimators'
+health events (``<system>.events.csv``, where the runs record their ``status``) and one
 self-contained ``report.html`` (plots embedded as data URIs) for a campaign folder."""
 
 import base64
@@ -12,6 +13,13 @@ import numpy as np
 from altfusion.atomic import write_text
 from altfusion.montecarlo import plots
 from altfusion.montecarlo.aggregation import CampaignStatistics, aggregate
+from altfusion.montecarlo.campaign_events import (
+    NONE_NOTABLE,
+    campaign_events,
+    records_health,
+    summary_rows,
+    write_campaign_events,
+)
 from altfusion.montecarlo.tables import HEADER, confidence_note, metric_row, statistics_json
 from altfusion.systems.faults import FAULTS
 
@@ -28,6 +36,10 @@ class Report:
     pngs: list[Path]
     summary: Path
     statistics: CampaignStatistics
+    events: Path | None = None
+    """Every health event of every run (None: the runs record no estimator's status)."""
+    health: list[tuple[str, str]] | None = None
+    """Each estimator's notable events over the runs, in words (None: no status recorded)."""
 
 
 def esc(value: object) -> str:
@@ -82,13 +94,20 @@ def write_report(out: Path) -> Report:
     write_text(summary, json.dumps(statistics_json(statistics), indent=2) + "\n")
     if statistics.metrics:
         write_profiles_csv(statistics, out / "rms_vs_time.csv")
+    events = health = None
+    if records_health(out):
+        by_run = campaign_events(out)
+        events = write_campaign_events(out, statistics.manifest["system"]["name"], by_run)
+        health = summary_rows(by_run)
     page = out / "report.html"
-    write_text(page, render(statistics, pngs, out))
-    return Report(page, pngs, summary, statistics)
+    write_text(page, render(statistics, pngs, out, health))
+    return Report(page, pngs, summary, statistics, events, health)
 
 
-def render(statistics: CampaignStatistics, pngs: list[Path], out: Path) -> str:
-    """The report page of the campaign in ``out``."""
+def render(statistics: CampaignStatistics, pngs: list[Path], out: Path,
+           health: list[tuple[str, str]] | None = None) -> str:
+    """The report page of the campaign in ``out`` (``health``: each estimator's notable
+    events over the runs, None where no status is recorded)."""
     manifest = statistics.manifest
     system = manifest["system"]
     parts = [f"<h1>Monte Carlo campaign: {esc(system['name'])}</h1>",
@@ -101,7 +120,8 @@ def render(statistics: CampaignStatistics, pngs: list[Path], out: Path) -> str:
                  f"interval of a zero-mean Gaussian error's σ at each output time (log axis: "
                  f"a 0.4 m band stays visible beside a 500 m one).</p>")
     parts += [image(path) for path in pngs]
-    parts += [worst_runs_section(statistics, out), failures_section(statistics),
+    parts += [worst_runs_section(statistics, out), health_section(statistics, health),
+              failures_section(statistics),
               system_section(manifest), versions_section(manifest)]
     body = "\n".join(part for part in parts if part)
     return (f"<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>"
@@ -150,6 +170,22 @@ def worst_runs_section(statistics: CampaignStatistics, out: Path) -> str:
                          rerun_command(statistics.manifest, out, index)))
     return ("<h2>Largest per-run RMS errors</h2>"
             + table(("metric", "run", "RMS", "seeds", "re-run alone"), rows))
+
+
+def health_section(statistics: CampaignStatistics,
+                   health: list[tuple[str, str]] | None) -> str:
+    """What each estimator did over the runs (:mod:`.campaign_events`), with where every
+    event of every run is."""
+    if health is None:
+        return ""
+    name = statistics.manifest["system"]["name"]
+    body = table(("estimator", "in how many runs, first time's median"), health) if health \
+        else f"<p>{esc(NONE_NOTABLE)}.</p>"
+    return (f"<h2>Health events over the runs</h2>{body}"
+            f'<p class="note">Read off each run\'s recorded health outputs (docs: estimator '
+            f"health); every event of every run, rejections included, in "
+            f"<code>{esc(name)}.events.csv</code>; a run's in words: "
+            f"<code>altfusion mc ... --run I</code>.</p>")
 
 
 def failures_section(statistics: CampaignStatistics) -> str:
