@@ -298,6 +298,7 @@ class AltitudeEKF(Estimator):
         self._datum_variance = 0.0
         """The datum's variance that no sample shows, m², after the last GNSS height sample
         (nothing else moves it: :meth:`_slow_error`)."""
+        self._slow_error()        # as stated, before any GNSS sample (and after a restart)
         self.n_terrain_resets = 0
         self.motion_noise = MotionNoise(
             (*self._heights, self.aid["gps_vz"]), maximum_scale(p.accel_psd,
