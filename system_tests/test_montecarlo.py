@@ -363,3 +363,20 @@ def test_a_fault_campaign_says_what_each_estimator_did_over_its_runs(ssp_files, 
     assert "fault_flight+gnss_step: health events of 2 runs" in said
     assert "  AltitudeEKF: " in said and "isolated gps 2/2 runs" in said
     assert (out / "fault_flight+gnss_step.events.csv").is_file()
+
+
+def test_compare_says_what_each_estimator_did_over_the_same_runs(ssp_files, tmp_path):
+    """``altfusion compare`` on the fault demonstration (its estimator's status recorded):
+    after the side-by-side metrics, each estimator's health events over the same seeded
+    runs, headed by its name; each estimator's folder holds the CSV of every event."""
+    out = tmp_path / "compare"
+    completed = subprocess.run(
+        cli("compare", str(ssp_files["fault_demo_altitude_ekf"]), "--estimators",
+            "AltitudeEKF,YangFusionKF", "-n", "2", "--stop", "40", "--workers", "1",
+            "--quiet", "--out", str(out)),
+        capture_output=True, text=True, timeout=600)
+    assert completed.returncode == 0, completed.stderr
+    said = completed.stdout
+    assert "AltitudeEKF: health events of 2 runs" in said
+    assert "YangFusionKF: health events of 2 runs" in said
+    assert list((out / "AltitudeEKF").glob("*.events.csv"))

@@ -107,14 +107,26 @@ def _rerun(args: argparse.Namespace, source, out: Path) -> int:
     return 1
 
 
-def _print_health(out: Path, name: str) -> None:
-    """What the estimators did over the campaign's runs (where they record their status),
-    and the CSV written with every event."""
-    from altfusion.montecarlo.campaign_events import records_health, report_campaign_events
+def _print_health(out: Path, name: str, csv: bool = True) -> None:
+    """What the estimators did over the runs of the campaign in ``out`` (where they record
+    their status), headed by ``name``, and (``csv``) the CSV written with every event (an
+    estimator's report in ``altfusion compare`` has written it)."""
+    from altfusion.montecarlo.campaign_events import (
+        campaign_events,
+        records_health,
+        report_campaign_events,
+        say_events,
+        summary_rows,
+    )
 
-    if records_health(out):
+    if not records_health(out):
+        return
+    if csv:
         text, path = report_campaign_events(out, name)
         print(f"{text}\nevery event of every run: {path}")
+        return
+    by_run = campaign_events(out)
+    print(say_events(name, summary_rows(by_run), len(by_run)))
 
 
 def command_report(args: argparse.Namespace) -> int:
@@ -137,6 +149,7 @@ def command_report(args: argparse.Namespace) -> int:
 def command_compare(args: argparse.Namespace) -> int:
     from altfusion.montecarlo.compare import (
         comparison_statistics,
+        folder_name,
         format_comparison,
         run_comparison,
         write_comparison,
@@ -156,6 +169,8 @@ def command_compare(args: argparse.Namespace) -> int:
         return status or 1
     page = write_comparison(out, estimators)
     print(format_comparison(comparison_statistics(out, estimators)))
+    for name in estimators:
+        _print_health(out / folder_name(name), name, csv=False)
     print(f"wrote {page}")
     return status
 
