@@ -17,6 +17,7 @@ import threading
 import time
 
 from altfusion.cosim.runner import Simulation
+from altfusion.cosim.scratch import remove_scratch_folders
 from altfusion.montecarlo.campaign import CampaignTask
 from altfusion.montecarlo.source import PreparedSystem, SystemSource, load_system
 from altfusion.montecarlo.storage import RunRecord, resident_memory, worker_name
@@ -52,10 +53,23 @@ PARENT_POLL = 1.0
 
 def _end_with_parent(parent: int) -> None:
     """Exit when the parent process is gone (killed with -9 it cannot stop its workers): it
-    is gone when this process's parent id changed (re-parented to init or a subreaper)."""
+    is gone when this process's parent id changed (re-parented to init or a subreaper). The
+    extracted FMUs are removed first (``os._exit`` runs no finalizer)."""
     while os.getppid() == parent:
         time.sleep(PARENT_POLL)
+    remove_scratch_folders()
     os._exit(1)
+
+
+def _terminated(signum: int, _frame) -> None:
+    """SIGTERM (the campaign stopping its runs in progress: interrupted, or a worker died):
+    leave at once, as the default disposition would, but without leaving this process's
+    extracted FMUs in the temporary folder (measured: one folder of 4-30 MB per worker and
+    interrupted campaign, kept for good). A second SIGTERM (the pool's and the campaign's
+    both stop a broken pool's workers) is ignored: it would end the removal halfway."""
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    remove_scratch_folders()
+    os._exit(128 + signum)
 
 
 READY_TIMEOUT = 60.0
@@ -70,10 +84,12 @@ def initialize_worker(source: SystemSource, ready: threading.Barrier | None = No
     short campaign taken by the first one ready.
 
     Workers ignore Ctrl-C: the parent process decides what happens to an interrupted
-    campaign (it keeps every finished run and stops the workers). A watchdog thread ends the
-    worker within ``PARENT_POLL`` s of its parent's death.
+    campaign (it keeps every finished run and stops the workers, by SIGTERM). A watchdog
+    thread ends the worker within ``PARENT_POLL`` s of its parent's death. Either way the
+    worker removes its scratch folders (:mod:`altfusion.cosim.scratch`) before it goes.
     """
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, _terminated)
     threading.Thread(target=_end_with_parent, args=(os.getppid(),), daemon=True,
                      name="parent-watchdog").start()
     with contextlib.suppress(Exception):  # each run of this worker reports the error
