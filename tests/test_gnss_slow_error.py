@@ -16,7 +16,7 @@ from gnss_flights import (  # noqa: E402
     SLOW,
     WHITE,
     Flight,
-    smooth_receiver_hover,
+    nmea_receiver_hover,
     wave_flight,
 )
 
@@ -104,17 +104,18 @@ def test_a_slow_error_stated_beside_the_white_noise_is_the_datum_s_and_weighs_ea
                                         "baro_noise": 0.1, "acc_noise": 0.05}],
                          ids=["nothing", "white_and_slow"])
 def test_a_receiver_wandering_within_its_slow_error_is_neither_rejected_nor_isolated(told):
-    """A smooth receiver hovering (``gnss_flights.smooth_receiver_hover``: 0.02 m white
-    noise read to 0.1 m under a 0.5 m / 30 s Gauss-Markov error, a 0.1 m baro at 50 Hz)
-    wanders further than its samples' scatter, and its innovations' mean over the bias
-    test's window moves with it. Told nothing (its typical 3 m read as mostly slow, its
-    samples scattering by centimetres) or told its white noise and slow error, its gate,
-    bias test and gains now hold the slow error: seeds 0-3, no sample rejected. Before,
-    the bias test and the gate took the wander for a fault: 182-310 samples rejected and
-    isolated 4.7-13.6 s of 120 s told nothing, 211-516 and 5.8-34.7 s told both."""
+    """A smooth receiver hovering (``gnss_flights.nmea_receiver_hover`` with a 0.5 m / 30 s
+    Gauss-Markov error: 0.02 m white noise read to 0.1 m, a 0.1 m baro at 50 Hz) wanders
+    further than its samples' scatter, and its innovations' mean over the bias test's
+    window moves with it. Told nothing (its typical 3 m read as mostly slow, its samples
+    scattering by centimetres) or told its white noise and slow error, its gate, bias test
+    and gains now hold the slow error: seeds 0-3, no sample rejected. Before, the bias test
+    and the gate took the wander for a fault: 206-624 of 1200 samples rejected and isolated
+    6.4-47.5 s of 120 s told nothing, 516-775 and 33.6-67.2 s told both."""
     for seed in range(4):
-        ekf = AltitudeEKF(AltitudeEKF.Params(**told), step_size=0.02)
-        assert smooth_receiver_hover(ekf, seed) == (0, 0.0)
+        hover = nmea_receiver_hover(AltitudeEKF(AltitudeEKF.Params(**told), step_size=0.01),
+                                    seed, wander=0.5, tau=30.0)
+        assert (hover.rejected, hover.isolated) == (0, 0.0)
 
 
 def test_a_white_gnss_told_right_gets_nothing_added():

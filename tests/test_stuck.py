@@ -18,6 +18,7 @@ from altfusion.estimators.xu import XuSHAEKF
 from altfusion.estimators.yang import YangFusionKF
 
 sys.path.insert(0, str(Path(__file__).parent))
+from gnss_flights import nmea_receiver_hover  # noqa: E402
 from stream_feeder import StreamFeeder  # noqa: E402
 
 
@@ -381,43 +382,11 @@ def test_a_receiver_without_speed_holding_still_is_held_until_the_baro_shows_a_c
     assert any("gps: the same reading" in note and "stuck" in note for note in notes)
 
 
-def hovering_nmea_receiver(cls: type, with_speed: bool, climb: float = 0.0,
-                           seconds: float = 120.0) -> tuple[list[str], int]:
-    """``cls`` (its defaults) hovering at 100 m for ``seconds`` (from 60 s on climbing at
-    ``climb``), fed a baro of 0.1 m noise at
-    50 Hz, an accelerometer of 0.05 m/s² at 100 Hz and a smooth receiver's GNSS height at
-    10 Hz: its error a Gauss-Markov wander of 0.3 m and 60 s under 2 cm of noise, read to
-    0.1 m (NMEA GGA's resolution), so that a reading repeats for a second or more; its
-    vertical speed (``with_speed``) 5 cm/s of noise read to 1 cm/s, else left unconnected
-    (reads 0); seed 1. The GNSS notes and the steps with the GNSS height isolated."""
-    estimator = cls(step_size=0.01)
-    feeder, rng = StreamFeeder(estimator), np.random.default_rng(1)
-    decay = math.exp(-0.1 / 60.0)
-    wander, notes, isolated = 0.3 * rng.standard_normal(), [], 0
-    for n in range(round(seconds / 0.01)):
-        h, vz = (100.0, 0.0) if n < 6000 else (100.0 + climb * (n - 6000) * 0.01, climb)
-        samples = {"acc": {"acc_z": 0.05 * rng.standard_normal()}}
-        if n % 2 == 0:
-            samples["baro"] = {"baro_h": h + 0.1 * rng.standard_normal(),
-                               "baro_p": 101325.0 * (1.0 - 2.25577e-5 * h) ** 5.25588,
-                               "baro_T": 288.15 - 0.0065 * h}
-        if n % 10 == 0:
-            wander = decay * wander + 0.3 * math.sqrt(1.0 - decay**2) * rng.standard_normal()
-            samples["gps"] = {"gps_h": round((h + wander + 0.02 * rng.standard_normal())
-                                             / 0.1) * 0.1,
-                              "gps_vdop": 1.0, "gps_nsat": 10, "gps_fix": True}
-            if with_speed:
-                samples["gps"]["gps_vz"] = round(vz + 0.05 * rng.standard_normal(), 2)
-        feeder.step(**samples)
-        notes += [note for note in estimator.take_notes() if "gps" in note]
-        isolated += bool(estimator.status & source_bit("gps", SourceBit.ISOLATED))
-    return notes, isolated
-
-
 @pytest.mark.parametrize("cls", [YangFusionKF, AltitudeEKF])
 @pytest.mark.parametrize("with_speed", [False, True])
 def test_a_smooth_quantized_receiver_hovering_is_held_not_stuck(cls, with_speed):
-    """A hovering receiver read to 0.1 m repeats its height for a second or more. Its
+    """A hovering receiver read to 0.1 m (``gnss_flights.nmea_receiver_hover``: 0.3 m /
+    60 s of wander, seed 1) repeats its height for a second or more. Its
     heights wander a few cm/s (0.3 m over a minute), which, judged against the centimetres
     its samples scatter, was a climb beyond any gate: with the speed unconnected AltitudeEKF
     found the height stuck 24 times in 120 s and isolated it for 12.8 s; with a noisy speed,
@@ -426,10 +395,10 @@ def test_a_smooth_quantized_receiver_hovering_is_held_not_stuck(cls, with_speed)
     the gate with the heights' scatter, in spans of 10 s) the receiver holds still: the
     repetitions are held, never stuck nor isolated. (The unconnected speed, reading 0, may
     still be found stuck: it is.)"""
-    notes, isolated = hovering_nmea_receiver(cls, with_speed)
-    height = [note for note in notes if "gps: the same reading" in note]
+    hover = nmea_receiver_hover(cls(step_size=0.01), with_speed=with_speed)
+    height = [note for note in hover.notes if "gps: the same reading" in note]
     assert not any("stuck" in note for note in height), height[:3]
-    assert isolated == 0
+    assert hover.isolated == 0.0
     assert any("holds still" in note for note in height)
 
 
@@ -443,7 +412,8 @@ def test_a_coarse_receiver_in_a_slow_climb_is_held_not_stuck(cls, with_speed, cl
     between readings) since the reading's first repetition is within what it may hold:
     before, AltitudeEKF's height was found stuck in three of these twelve cases (isolated
     for seconds each time); now held throughout, in every case."""
-    notes, _ = hovering_nmea_receiver(cls, with_speed, climb, 180.0)
-    height = [note for note in notes if "gps: the same reading" in note]
+    hover = nmea_receiver_hover(cls(step_size=0.01), with_speed=with_speed, climb=climb,
+                                seconds=180.0)
+    height = [note for note in hover.notes if "gps: the same reading" in note]
     assert not any("stuck" in note for note in height), height[:3]
     assert any("holds still" in note for note in height)

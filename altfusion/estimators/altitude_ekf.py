@@ -292,9 +292,6 @@ class AltitudeEKF(Estimator):
         self._reference_rejected_since: float | None = None
         self._reference_sample = (0.0, 0.0, 1.0)       # its last rejected (z, stamp, σ)
         self._reference_seen = False
-        self._gps_slow = (0.0, 0.0)
-        """The GNSS height's slow error in a sample's R and in its gate's S, m², after its
-        last sample (:meth:`_slow_error`)."""
         self._datum_variance = 0.0
         """The datum's variance that no sample shows, m², after the last GNSS height sample
         (nothing else moves it: :meth:`_slow_error`)."""
@@ -558,7 +555,7 @@ class AltitudeEKF(Estimator):
         y = z - predicted
         if source == "baro":
             y = self._ground_effect(y)
-        slow_R, slow_S = self._gps_slow if source == "gps" else (0.0, 0.0)  # _slow_error
+        slow_R, slow_S = self._slow_shares(source)
         S = quadratic_form(self.P, row) + R + slow_S
         if source in ("radar", "laser") and self._terrain_step(source, y, S, row_h, R):
             return
@@ -669,7 +666,7 @@ class AltitudeEKF(Estimator):
         h_s, _, row_h, _ = self._back(stamp)
         predicted, row = self._model(self._reference, h_s, row_h)
         S_ref = quadratic_form(self.P, row) + self._noise_variance(self._reference, sigma) \
-            + (self._gps_slow[1] if self._reference == "gps" else 0.0)
+            + self._slow_shares(self._reference)[1]
         self._reset_to_reference(z - predicted, S_ref)
         return True
 
@@ -832,34 +829,41 @@ class AltitudeEKF(Estimator):
         Gauss-Markov part, correlation times of minutes to hours) and every sample of that
         time shares it. So:
 
-        * the gate: each sample's innovation variance S takes it (a sample that far off is
-          the receiver's own wander, not a fault); beside a stated ``gps_noise`` only the
-          stated ``gps_slow_error``², the σ stated holding the rest;
-        * each sample's R takes the stated ``gps_slow_error``² (the gain: a stated slow
-          error is not followed as motion); a stated ``gps_noise`` is then the white part
-          (a datasheet's σ, the whole error, has the slow part in already, and a noise not
-          stated, measured from successive innovations, is the white part, for which the
-          slow share inferred from the typical receiver's noise widens the gate only:
-          a white GNSS told nothing is weighted as precise as it shows, as before);
+        * the gate and each sample's R (:meth:`_slow_shares`);
         * the bias test's window: its mean is uncertain by at least the whole slow error
           (:attr:`~altfusion.estimators.aid_source.InnovationWindow.shared`);
         * while the GNSS defines the datum (the height reference, once its first sample is
           in), ``h_std``: the datum is as uncertain, however many samples were averaged.
 
         Measured on a hover (``tests/gnss_flights.py``: 0.1 m baro at 50 Hz; a GNSS at 10 Hz
-        read to 0.1 m with a 0.5 m / 30 s Gauss-Markov error): told nothing, 182-310 of its
-        1200 samples rejected and the GNSS isolated for 4.7-13.6 s before (the slow error in
-        ``h_std`` only), none now; told 0.05 m white and 0.5 m slow, 211-516 and 5.8-34.7 s
+        read to 0.1 m with a 0.5 m / 30 s Gauss-Markov error): told nothing, 206-624 of its
+        1200 samples rejected and the GNSS isolated for 6.4-47.5 s before (the slow error in
+        ``h_std`` only), none now; told 0.05 m white and 0.5 m slow, 516-775 and 33.6-67.2 s
         before, none now.
         Deviation (PX4 EKF2 has none): not a Gauss-Markov state, which would average the
         error down over flights much longer than its correlation time while the baro holds
         the height; bounded above by its full variance instead."""
         slow = self._slow_variance()
-        stated = self.params.gps_slow_error ** 2
-        self._gps_slow = (stated, stated if self.noise_stated["gps"] else slow)
         self.aid["gps"].window.shared = slow
         self._datum_variance = slow if self._reference == "gps" and self._reference_seen \
             else 0.0
+
+    def _slow_shares(self, source: str) -> tuple[float, float]:
+        """The shares of ``source``'s slow error (:meth:`_slow_error`; the GNSS's, 0 for
+        the others) in its samples' R and in their gate's innovation variance S, m²:
+
+        * R takes the stated ``gps_slow_error``² (the gain: a stated slow error is not
+          followed as motion), ``gps_noise`` then being the white part;
+        * S takes it too (a sample that far off is the receiver's own wander, not a fault)
+          and, where ``gps_noise`` is not stated (R is then the white noise measured), the
+          whole slow variance, the share inferred from the typical receiver's noise
+          included; that share widens the gate only: a white GNSS told nothing is weighted
+          as precisely as it shows. A stated ``gps_noise`` beyond what its samples show (a
+          datasheet's σ, the whole error) has the slow part in R already."""
+        if source != "gps":
+            return 0.0, 0.0
+        stated = self.params.gps_slow_error ** 2
+        return stated, (stated if self.noise_stated["gps"] else self.aid["gps"].window.shared)
 
     def _slow_variance(self) -> float:
         """The variance of the GNSS height's slowly varying error, m²: ``gps_slow_error``²,

@@ -155,7 +155,7 @@ class HeightSlope:
         """How far the heights' slope carries them over ``span`` s, m (0 with fewer than two
         instants)."""
         slope = self._fit()[0]
-        return abs(slope) * span if slope == slope else 0.0
+        return 0.0 if math.isnan(slope) else abs(slope) * span
 
     def moving(self, sigma: float, gate: float) -> bool:
         """The heights climb or descend: their slope b is faster than :data:`VEHICLE_MOVING`

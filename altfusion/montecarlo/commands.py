@@ -107,30 +107,26 @@ def _rerun(args: argparse.Namespace, source, out: Path) -> int:
     return 1
 
 
-def _print_health(out: Path, name: str, csv: bool = True) -> None:
+def _print_health(out: Path, name: str) -> None:
     """What the estimators did over the runs of the campaign in ``out`` (where they record
-    their status), headed by ``name``, and (``csv``) the CSV written with every event (an
-    estimator's report in ``altfusion compare`` has written it)."""
-    from altfusion.montecarlo.campaign_events import (
-        campaign_events,
-        records_health,
-        report_campaign_events,
-        say_events,
-        summary_rows,
-    )
+    their status), headed by ``name``, and the CSV written with every event."""
+    from altfusion.montecarlo.campaign_events import records_health, report_campaign_events
 
-    if not records_health(out):
-        return
-    if csv:
+    if records_health(out):
         text, path = report_campaign_events(out, name)
         print(f"{text}\nevery event of every run: {path}")
-        return
-    by_run = campaign_events(out)
-    print(say_events(name, summary_rows(by_run), len(by_run)))
+
+
+def _print_report_health(name: str, report) -> None:
+    """What the estimators did over the runs of a written report's campaign (where they
+    record their status), headed by ``name``."""
+    from altfusion.montecarlo.campaign_events import say_events
+
+    if report.health is not None:
+        print(say_events(name, report.health, len(report.statistics.runs)))
 
 
 def command_report(args: argparse.Namespace) -> int:
-    from altfusion.montecarlo.campaign_events import say_events
     from altfusion.montecarlo.report import write_report
     from altfusion.montecarlo.tables import format_statistics
 
@@ -138,22 +134,14 @@ def command_report(args: argparse.Namespace) -> int:
     for index, reason in sorted(report.statistics.skipped.items()):
         print(f"skipped run {index}: {reason} (altfusion mc --resume re-runs it)")
     print(format_statistics(report.statistics))
-    if report.health is not None:
-        print(say_events(report.statistics.manifest["system"]["name"], report.health,
-                         len(report.statistics.runs)))
+    _print_report_health(report.statistics.manifest["system"]["name"], report)
     events = f", {report.events}" if report.events else ""
     print(f"wrote {report.html}, {report.summary}{events} and {len(report.pngs)} plots")
     return 0
 
 
 def command_compare(args: argparse.Namespace) -> int:
-    from altfusion.montecarlo.compare import (
-        comparison_statistics,
-        folder_name,
-        format_comparison,
-        run_comparison,
-        write_comparison,
-    )
+    from altfusion.montecarlo.compare import format_comparison, run_comparison, write_comparison
 
     estimators = [name.strip() for name in args.estimators.split(",") if name.strip()]
     out = output_folder(args.out or Path("results") / "compare" / args.system.stem)
@@ -167,10 +155,10 @@ def command_compare(args: argparse.Namespace) -> int:
                      f"--out {out} --resume"))
     if len(outcomes) < len(estimators) or any(not o.finished for _, o in outcomes):
         return status or 1
-    page = write_comparison(out, estimators)
-    print(format_comparison(comparison_statistics(out, estimators)))
-    for name in estimators:
-        _print_health(out / folder_name(name), name, csv=False)
+    page, reports = write_comparison(out, estimators)
+    print(format_comparison([(name, report.statistics) for name, report in reports]))
+    for name, report in reports:
+        _print_report_health(name, report)
     print(f"wrote {page}")
     return status
 

@@ -16,14 +16,14 @@ from pathlib import Path
 from altfusion.atomic import write_text
 from altfusion.cosim.ssp import read_ssp
 from altfusion.montecarlo import plots
-from altfusion.montecarlo.aggregation import CampaignStatistics, aggregate
+from altfusion.montecarlo.aggregation import CampaignStatistics
 from altfusion.montecarlo.execution import (
     CampaignOutcome,
     CampaignSettings,
     Execution,
     run_campaign,
 )
-from altfusion.montecarlo.report import STYLE, esc, image, table, write_report
+from altfusion.montecarlo.report import STYLE, Report, esc, image, table, write_report
 from altfusion.montecarlo.source import CampaignError, SystemSource
 from altfusion.montecarlo.swap import find_fmu
 from altfusion.montecarlo.tables import HEADER, format_table, metric_row, statistics_json
@@ -109,11 +109,13 @@ def format_comparison(results: list[tuple[str, CampaignStatistics]]) -> str:
     return text + f"\n[brackets]: {100 * confidence:g} % confidence intervals"
 
 
-def write_comparison(out: Path, estimators: list[str]) -> Path:
+def write_comparison(out: Path, estimators: list[str]) -> tuple[Path, list[tuple[str, Report]]]:
     """Per-estimator reports, then ``compare.html`` (side-by-side table, overlaid RMS versus
-    time) and ``compare.json`` in ``out``; returns the HTML path."""
+    time) and ``compare.json`` in ``out``; returns the HTML path and each estimator's
+    report."""
     out = Path(out)
-    results = [(name, write_report(out / folder_name(name)).statistics) for name in estimators]
+    reports = [(name, write_report(out / folder_name(name))) for name in estimators]
+    results = [(name, report.statistics) for name, report in reports]
     first = results[0][1]
     series = [(f"{name}: {m.metric.name}", m) for name, s in results for m in s.metrics]
     pngs = []
@@ -135,9 +137,4 @@ def write_comparison(out: Path, estimators: list[str]) -> Path:
     write_text(page, f"<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>"
                f"{esc(system['name'])} comparison</title><style>{STYLE}</style></head>"
                f"<body>\n{body}\n</body></html>\n")
-    return page
-
-
-def comparison_statistics(out: Path, estimators: list[str],
-                          ) -> list[tuple[str, CampaignStatistics]]:
-    return [(name, aggregate(Path(out) / folder_name(name))) for name in estimators]
+    return page, reports
