@@ -5,10 +5,16 @@ mistake. Before, each run of the yang2020 system left eight extracted FMUs (abou
 in ``/tmp`` and each worker its own: a day of test suites had filled 19 GB."""
 
 import os
+import shutil
 import subprocess
 import sys
 
+import numpy as np
 import pytest
+
+from altfusion.cosim import extraction
+from altfusion.montecarlo import worker
+from altfusion.montecarlo.source import SystemSource
 
 
 def altfusion(args: list[str], tmp_path) -> tuple[subprocess.CompletedProcess, list[str]]:
@@ -33,3 +39,33 @@ def test_no_temporary_folder_outlives_a_command(ssp_files, tmp_path, command):
     completed, left = altfusion(args, tmp_path)
     assert completed.returncode == (2 if "plant.mass=-1" in args else 0), completed.stderr
     assert left == []
+
+
+def test_a_kept_worker_extracts_each_fmu_once_and_keeps_few_systems(ssp_files, tmp_path):
+    """A worker running campaign after campaign (the kept workers of ``evaluate`` and
+    ``reproduce``, a Dask worker): each campaign of an evaluation reads its own SSP archive
+    holding the same FMUs. Those were extracted anew for every campaign (keyed by path) and
+    every system was kept with its unpacked archive: an evaluation's worker grew its share of
+    the temporary folder by about 22 MB per campaign until it ended (benchmarks/RESULTS.md).
+    Now an FMU of the same bytes is extracted once per process, and beyond
+    ``KEPT_SYSTEMS`` the system used longest ago is closed and its unpacked archive removed;
+    used again, it is rebuilt and runs the same."""
+    sources = []
+    for k in range(worker.KEPT_SYSTEMS + 2):
+        campaign = tmp_path / f"campaign{k}"
+        campaign.mkdir()
+        shutil.copy(ssp_files["plant_yang2020"], campaign / "system.ssp")
+        sources.append(SystemSource.from_path(campaign / "system.ssp"))
+    first = worker.simulation_for(sources[0]).run(stop_time=2.0)
+    unpacked = [worker._SIMULATIONS[sources[0].key][0].loaded.folder.path]
+    extracted = sorted(extraction._FMU_FOLDER.path.iterdir())
+    for source in sources[1:]:
+        worker.simulation_for(source)
+        unpacked.append(worker._SIMULATIONS[source.key][0].loaded.folder.path)
+    assert sorted(extraction._FMU_FOLDER.path.iterdir()) == extracted
+    assert list(worker._SIMULATIONS)[-worker.KEPT_SYSTEMS:] == [
+        s.key for s in sources[-worker.KEPT_SYSTEMS:]]
+    assert [folder.exists() for folder in unpacked] == [False] * 2 + [True] * worker.KEPT_SYSTEMS
+    again = worker.simulation_for(sources[0]).run(stop_time=2.0)
+    assert list(again.columns) == list(first.columns)
+    assert all(np.array_equal(again[name], first[name]) for name in first.columns)

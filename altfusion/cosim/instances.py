@@ -22,7 +22,7 @@ from typing import Any
 from xml.etree import ElementTree as ET
 
 import fmpy
-from fmpy import calloc, extract, free, read_model_description
+from fmpy import calloc, free, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import (
     FMU2Slave,
@@ -36,8 +36,8 @@ from fmpy.fmi2 import (
     fmi2ValueReference,
 )
 
+from altfusion.cosim.extraction import extracted_folder
 from altfusion.cosim.results import Warnings
-from altfusion.cosim.scratch import ScratchFolder
 from altfusion.params import coerce
 from altfusion.version import CORE_VERSION
 
@@ -199,14 +199,9 @@ def _router() -> _LogRouter:
     return _ROUTER
 
 
-_EXTRACTED: dict[Path, str] = {}
-"""The FMUs extracted by this process (see :func:`_extracted_folder`)."""
-_EXTRACTED_BY: int | None = None
-_FMU_FOLDER: ScratchFolder | None = None
-
-
-_PYTHONFMU_LIBRARIES: dict[Path, Any] = {}
-"""The loaded pythonfmu libraries, whose Python state is released at exit (see below)."""
+_PYTHONFMU_LIBRARIES: dict[str, Any] = {}
+"""The loaded pythonfmu libraries by the folder they were loaded from, whose Python state is
+released at exit (see below)."""
 
 
 def _release_pythonfmu_state() -> None:
@@ -246,27 +241,12 @@ def release_mapped_pythonfmu_state() -> None:
             finalize()
 
 
-def _track_library(path: Path, fmu: FMU2Slave) -> None:
-    if path in _PYTHONFMU_LIBRARIES or not hasattr(fmu.dll, "finalizePythonInterpreter"):
+def _track_library(folder: str, fmu: FMU2Slave) -> None:
+    if folder in _PYTHONFMU_LIBRARIES or not hasattr(fmu.dll, "finalizePythonInterpreter"):
         return
     if not _PYTHONFMU_LIBRARIES:
         atexit.register(_release_pythonfmu_state)
-    _PYTHONFMU_LIBRARIES[path] = fmu.dll
-
-
-def _extracted_folder(path: Path) -> str:
-    """The FMU extracted once per process (its libraries stay loaded from there), into a
-    folder of this process's that is removed when it exits (:mod:`altfusion.cosim.scratch`).
-    A forked child keeps using what its parent extracted (its libraries are mapped from
-    there) and extracts what is new into a folder of its own."""
-    global _EXTRACTED_BY, _FMU_FOLDER
-    folder = _EXTRACTED.get(path)
-    if folder is None:
-        if os.getpid() != _EXTRACTED_BY:
-            _EXTRACTED_BY, _FMU_FOLDER = os.getpid(), ScratchFolder("altfusion_fmus_")
-        target = _FMU_FOLDER.path / f"{len(_EXTRACTED)}_{path.stem}"
-        folder = _EXTRACTED[path] = str(extract(str(path), unzipdir=target))
-    return folder
+    _PYTHONFMU_LIBRARIES[folder] = fmu.dll
 
 
 class FmuInstance:
@@ -274,7 +254,7 @@ class FmuInstance:
 
     def __init__(self, name: str, info: FmuInfo):
         self.name, self.info = name, info
-        folder = _extracted_folder(info.path)
+        folder = extracted_folder(info.path)
         router = _router()
         self.instance_name, self.messages = router.register(name)
         self.warnings = Warnings()
@@ -287,7 +267,7 @@ class FmuInstance:
             router.queues.pop(self.instance_name, None)
             raise CosimError(f"component '{name}': {details}") from None
         self._component = ctypes.c_void_p(self.fmu.component)
-        _track_library(info.path, self.fmu)
+        _track_library(folder, self.fmu)
 
     def errors(self) -> list[str]:
         """Messages logged at fmi2Error severity or worse since the last call; clears them.
@@ -432,7 +412,7 @@ class CoreInstance:
         self.core_class = getattr(importlib.import_module(module), qualname)
         self.name, self.info = name, info
         self._by_ref = {v.value_reference: v for v in info.variables.values()}
-        self.resources = str(Path(_extracted_folder(info.path)) / "resources")
+        self.resources = str(Path(extracted_folder(info.path)) / "resources")
         self.core = self.core_class()
         self.warnings = Warnings()
 

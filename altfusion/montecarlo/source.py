@@ -5,8 +5,9 @@ fault scenario inserted (``altfusion mc --fault``)."""
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+from altfusion.cosim.extraction import file_sha256
 from altfusion.cosim.ssp import LoadedSystem, read_ssp
-from altfusion.montecarlo.swap import Swap, SwapEffect, file_sha256, find_fmu, swap_component
+from altfusion.montecarlo.swap import Swap, SwapEffect, find_fmu, swap_component
 from altfusion.systems.faults import FAULT_COMPONENT, FAULT_FMU, with_fault
 from altfusion.systems.spec import SystemSpec
 

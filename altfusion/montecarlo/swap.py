@@ -13,10 +13,10 @@ its name and step size and adapts the system to what the replacement declares:
   not mean the same thing.
 """
 
-import hashlib
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+from altfusion.cosim.extraction import file_sha256
 from altfusion.cosim.instances import fmu_info
 from altfusion.systems.spec import SystemSpec
 
@@ -46,14 +46,6 @@ class SwapEffect:
     dropped_connections: tuple[str, ...] = ()
     dropped_parameters: tuple[str, ...] = ()
     dropped_recordings: tuple[str, ...] = ()
-
-
-def file_sha256(path: Path) -> str:
-    digest = hashlib.sha256()
-    with open(path, "rb") as handle:
-        for block in iter(lambda: handle.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
 
 
 def find_fmu(component: str, name: str, ssp: Path, ssp_fmus: dict[str, Path]) -> Swap:

@@ -1,5 +1,6 @@
 """What runs inside a worker process: one cached :class:`Simulation` per system, reused for
-every run through ``reset`` (pythonfmu leaks memory on every instantiation).
+every run through ``reset`` (pythonfmu leaks memory on every instantiation), for the
+:data:`KEPT_SYSTEMS` systems used last.
 
 The cache is module-level, so the same functions serve local worker processes (created with
 the "spawn" start method; the initializer warms the cache) and Dask workers (the first task
@@ -15,6 +16,7 @@ import os
 import signal
 import threading
 import time
+from collections import OrderedDict
 
 from altfusion.cosim.runner import Simulation
 from altfusion.cosim.scratch import remove_scratch_folders
@@ -22,7 +24,17 @@ from altfusion.montecarlo.campaign import CampaignTask
 from altfusion.montecarlo.source import PreparedSystem, SystemSource, load_system
 from altfusion.montecarlo.storage import RunRecord, resident_memory, worker_name
 
-_SIMULATIONS: dict[tuple, tuple[PreparedSystem, Simulation]] = {}
+KEPT_SYSTEMS = 2
+"""Simulations a worker keeps, the most recently used: the campaigns of a reproduction or an
+evaluation run one after the other, each on one system, and a Dask worker may serve two
+campaigns at once. A system used again after more than this many others is instantiated
+anew. Each one kept holds its SSP's FMUs unpacked in the temporary folder (6.2 MB for an
+evaluation's system) and its instances: kept for good, an evaluation's systems grew each
+worker's share of the temporary folder campaign after campaign (with
+:mod:`altfusion.cosim.extraction`'s FMUs extracted anew: 4.8 GiB on two workers after 105
+campaigns, ``benchmarks/scratch_space.py``)."""
+
+_SIMULATIONS: OrderedDict[tuple, tuple[PreparedSystem, Simulation]] = OrderedDict()
 _FAILURES: dict[tuple, Exception] = {}
 _LOCK = threading.Lock()
 
@@ -31,7 +43,8 @@ def simulation_for(source: SystemSource) -> Simulation:
     """This process's simulation of ``source``, created on first use and kept.
 
     If creating it failed (e.g. FMUs built from another core), every later call raises the
-    same error instead of instantiating the FMUs again.
+    same error instead of instantiating the FMUs again. Beyond :data:`KEPT_SYSTEMS`, the
+    simulation used longest ago is closed (its instances freed, its unpacked SSP removed).
     """
     if source.key in _FAILURES:
         raise _FAILURES[source.key].with_traceback(None)
@@ -44,6 +57,10 @@ def simulation_for(source: SystemSource) -> Simulation:
             _FAILURES[source.key] = error
             raise
         _SIMULATIONS[source.key] = cached
+        while len(_SIMULATIONS) > KEPT_SYSTEMS:
+            _, (_, oldest) = _SIMULATIONS.popitem(last=False)
+            oldest.close()
+    _SIMULATIONS.move_to_end(source.key)
     return cached[1]
 
 
