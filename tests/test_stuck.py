@@ -18,7 +18,7 @@ from altfusion.estimators.xu import XuSHAEKF
 from altfusion.estimators.yang import YangFusionKF
 
 sys.path.insert(0, str(Path(__file__).parent))
-from gnss_flights import nmea_receiver_hover  # noqa: E402
+from gnss_flights import air_data, nmea_receiver_hover  # noqa: E402
 from stream_feeder import StreamFeeder  # noqa: E402
 
 
@@ -185,8 +185,7 @@ def waves(cls: type, unconnected: str | None = None, frozen: str = "baro_h",
         h, v, a = (100.0 + 10.0 * math.sin(t / 5.0), 2.0 * math.cos(t / 5.0),
                    -0.4 * math.sin(t / 5.0))
         samples = {"baro": {"baro_h": h + baro_offset + 0.5 * rng.standard_normal(),
-                            "baro_p": 101325.0 * (1.0 - 2.25577e-5 * h) ** 5.25588,
-                            "baro_T": 288.15 - 0.0065 * h},
+                            **air_data(h)},
                    "acc": {"acc_z": a + 0.05 * rng.standard_normal()}}
         if n % 10 == 0:
             samples["gps"] = {"gps_h": h + 1.5 * rng.standard_normal(),
@@ -349,8 +348,7 @@ def parked(cls: type, seconds: float, climb_after: float = math.inf,
         samples = {"acc": {"acc_z": 0.05 * rng.standard_normal()}}
         if n % 2 == 0:
             samples["baro"] = {"baro_h": h + 0.007 * t + 0.5 * rng.standard_normal(),
-                               "baro_p": 101325.0 * (1.0 - 2.25577e-5 * h) ** 5.25588,
-                               "baro_T": 288.15 - 0.0065 * h}
+                               **air_data(h)}
         if n % 20 == 0:
             gps_h = h + rng.standard_normal()
             if t >= 5.0:
