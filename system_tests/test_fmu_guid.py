@@ -29,13 +29,19 @@ def test_rebuilding_unchanged_sources_keeps_the_guid(fmus, tmp_path):
     assert read_model_description(str(fmus["BaselineKF"])).guid == first
 
 
-def test_swapping_two_outputs_value_references_changes_the_guid(fmus, tmp_path):
+def swapped_build(folder: Path) -> Path:
+    """BaselineKF built into ``folder`` with its outputs bias and innovation's value
+    references swapped."""
     source = SCRIPT.read_text()
     assert FIRST in source and SECOND in source
-    swapped = tmp_path / "src" / SCRIPT.name
+    swapped = folder / "src" / SCRIPT.name
     swapped.parent.mkdir()
     swapped.write_text(source.replace(FIRST, "@@").replace(SECOND, FIRST).replace("@@", SECOND))
-    description = read_model_description(str(build_fmu.build_fmu(swapped, tmp_path / "out")))
+    return build_fmu.build_fmu(swapped, folder / "out")
+
+
+def test_swapping_two_outputs_value_references_changes_the_guid(fmus, tmp_path):
+    description = read_model_description(str(swapped_build(tmp_path)))
     original = read_model_description(str(fmus["BaselineKF"]))
     refs = {v.name: v.valueReference for v in description.modelVariables}
     original_refs = {v.name: v.valueReference for v in original.modelVariables}
@@ -64,7 +70,28 @@ def test_an_instance_asked_for_with_another_builds_guid_is_refused_naming_both(f
             f"component 'atmosphere': fmi2Instantiate: GUID '{stale}' is not this FMU's "
             f"('{info.guid}'): the host read the modelDescription.xml of another build")):
         FmuInstance("atmosphere", replace(info, guid=stale))
-    instance = FmuInstance("atmosphere", info)
+    run_briefly(FmuInstance("atmosphere", info))
+
+
+def test_an_fmu_rebuilt_at_a_path_already_run_is_read_and_run_anew(fmus, tmp_path):
+    """A process that ran an FMU and then finds another build at the same path (rebuilt
+    between two runs of one session) reads the new build's description and extracts and
+    runs the new build, not the first one's files (the description was cached by path: its
+    stale GUID now meets the new build's extraction and is refused)."""
+    path = tmp_path / "BaselineKF.fmu"
+    shutil.copy(fmus["BaselineKF"], path)
+    first = fmu_info(path)
+    run_briefly(FmuInstance("estimator", first))
+    shutil.copy(swapped_build(tmp_path), path)
+    second = fmu_info(path)
+    assert second.guid != first.guid
+    assert (second.variables["bias"].value_reference,
+            second.variables["innovation"].value_reference) == (
+        first.variables["innovation"].value_reference, first.variables["bias"].value_reference)
+    run_briefly(FmuInstance("estimator", second))
+
+
+def run_briefly(instance: FmuInstance) -> None:
     instance.initialize({}, 0.01, 0.0, 1.0)
     instance.exit_initialization()
     instance.do_step(0.0, 0.01)

@@ -36,7 +36,7 @@ from fmpy.fmi2 import (
     fmi2ValueReference,
 )
 
-from altfusion.cosim.extraction import extracted_folder
+from altfusion.cosim.extraction import extracted_folder, file_sha256
 from altfusion.cosim.results import Warnings
 from altfusion.params import coerce
 from altfusion.version import CORE_VERSION
@@ -88,13 +88,17 @@ class FmuInfo:
     (ModelStructure dependencies)."""
 
 
-_INFO_CACHE: dict[Path, FmuInfo] = {}
+_INFO_CACHE: dict[tuple[Path, str], FmuInfo] = {}
+"""By path and content (an FMU rebuilt at a path already read is read anew, as it is
+extracted anew: :mod:`altfusion.cosim.extraction`)."""
+
 
 def fmu_info(path: Path) -> FmuInfo:
     """Read (and cache) the modelDescription and our vendor annotation of an FMU."""
     path = Path(path).resolve()
-    if path in _INFO_CACHE:
-        return _INFO_CACHE[path]
+    key = (path, file_sha256(path))
+    if key in _INFO_CACHE:
+        return _INFO_CACHE[key]
     md = read_model_description(str(path))
     with zipfile.ZipFile(path) as archive:
         root = ET.fromstring(archive.read("modelDescription.xml"))
@@ -121,7 +125,7 @@ def fmu_info(path: Path) -> FmuInfo:
         variables=variables,
         feedthrough_inputs=frozenset(feedthrough & inputs),
     )
-    _INFO_CACHE[path] = info
+    _INFO_CACHE[key] = info
     return info
 
 
