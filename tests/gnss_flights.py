@@ -10,6 +10,7 @@ from stream_feeder import StreamFeeder
 
 from altfusion.constants import ISA_LAPSE_RATE, ISA_P0, ISA_T0
 from altfusion.physics.barometric import pressure_at, temperature_at
+from altfusion.physics.gauss_markov import gauss_markov_step
 
 SLOW, TAU, WHITE = 1.5, 60.0, 0.3
 """The receiver's height error: a first-order Gauss-Markov error of 1.5 m and 60 s (started
@@ -31,9 +32,8 @@ class GaussMarkov:
 
     def step(self) -> float:
         """The error one period later."""
-        decay = self.decay
-        self.value = decay * self.value + self.std * math.sqrt(1.0 - decay**2) \
-            * self.rng.standard_normal()
+        self.value = gauss_markov_step(self.value, self.decay, self.std,
+                                       self.rng.standard_normal())
         return self.value
 
 

@@ -10,10 +10,7 @@ from test_mc_report import TIME, manifest
 from altfusion.cli import main
 from altfusion.cosim.results import Results
 from altfusion.estimators.health import Status, status_bits
-from altfusion.montecarlo.campaign_events import (
-    records_health,
-    report_campaign_events,
-)
+from altfusion.montecarlo.campaign_events import campaign_health, records_health
 from altfusion.montecarlo.report import write_report
 from altfusion.montecarlo.storage import RunRecord, write_manifest, write_run
 
@@ -52,11 +49,11 @@ def test_each_notable_event_is_counted_in_runs_at_its_median_first_time(tmp_path
     """The isolation in runs 1 and 3 (at 5 and 12.5 s: median 8.75 s), the baro carrying
     the height from then on, validity lost in run 2 at 8 s; every event of every run in the
     CSV, rejections and the start included, with its run."""
-    text, path = report_campaign_events(write_campaign(tmp_path), "flight")
-    assert text == ("flight: health events of 4 runs\n  est: validity lost 1/4 runs (median "
-                    "8.0 s); isolated gps 2/4 runs (median 8.8 s); fallback baro 2/4 runs "
-                    "(median 8.8 s)")
-    with open(path, newline="") as handle:
+    health = campaign_health(write_campaign(tmp_path), "flight")
+    assert health.said("flight") == (
+        "flight: health events of 4 runs\n  est: validity lost 1/4 runs (median 8.0 s); "
+        "isolated gps 2/4 runs (median 8.8 s); fallback baro 2/4 runs (median 8.8 s)")
+    with open(health.events, newline="") as handle:
         rows = list(csv.DictReader(handle))
     assert {row["run"] for row in rows if row["what"] == "isolated"} == {"1", "3"}
     assert {row["run"] for row in rows if row["what"] == "initialized"} == {"0", "1", "2", "3"}
@@ -69,8 +66,9 @@ def test_mc_and_report_say_them_and_the_report_page_shows_them(tmp_path, capsys)
     lines after a campaign (:func:`~altfusion.montecarlo.commands._print_health`)."""
     write_campaign(tmp_path)
     report = write_report(tmp_path)
-    assert report.events == tmp_path / "flight.events.csv" and report.events.is_file()
-    assert report.health == [("est", "validity lost 1/4 runs (median 8.0 s); isolated gps "
+    assert report.health.events == tmp_path / "flight.events.csv"
+    assert report.health.events.is_file()
+    assert report.health.rows == [("est", "validity lost 1/4 runs (median 8.0 s); isolated gps "
                                      "2/4 runs (median 8.8 s); fallback baro 2/4 runs "
                                      "(median 8.8 s)")]
     page = report.html.read_text()
@@ -87,7 +85,7 @@ def test_runs_without_a_recorded_status_have_nothing_to_say(tmp_path, capsys):
     write_campaign(tmp_path, with_status=False)
     assert not records_health(tmp_path)
     report = write_report(tmp_path)
-    assert report.events is None and report.health is None
+    assert report.health is None
     assert "Health events" not in report.html.read_text()
     assert main(["report", str(tmp_path)]) == 0
     assert "health events" not in capsys.readouterr().out

@@ -85,7 +85,7 @@ def command_evaluate(args: argparse.Namespace) -> int:
         told_modes,
         variant_folder,
     )
-    from altfusion.montecarlo.campaign_events import report_campaign_events
+    from altfusion.montecarlo.campaign_events import campaign_health
     from altfusion.montecarlo.commands import INTERRUPTED, _report_outcome
     from altfusion.montecarlo.execution import Execution, kept_workers
 
@@ -121,12 +121,13 @@ def command_evaluate(args: argparse.Namespace) -> int:
     for variant, cells in results.items():
         print(f"\ntold {variant.label}:" if len(results) > 1 else "")
         print(format_text(cells))
-    events = [(v, report_campaign_events(variant_folder(out, v) / s.name, s.name))
+    events = [(v, s.name, campaign_health(variant_folder(out, v) / s.name, s.name))
               for v, s, o in outcomes if o]
-    print("\n" + "\n".join(f"{v.name}/{text}" for v, (text, _path) in events))
+    print("\n" + "\n".join(f"{v.name}/{health.said(name)}" for v, name, health in events))
     scenarios = plans[primary(results)]
     markdown = format_markdown(results, names, scenarios, record)
-    files = [*(path for _v, (_text, path) in events), write_text(out / "evaluation.md", markdown),
+    files = [*(health.events for _v, _name, health in events),
+             write_text(out / "evaluation.md", markdown),
              write_html(out / "evaluation.html", results, names, scenarios, record),
              write_text(out / "evaluation_summary.json", summary_json(results))]
     if args.docs:

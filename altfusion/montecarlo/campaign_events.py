@@ -5,6 +5,7 @@ its validity, and at what median time. ``altfusion evaluate`` says them for each
 ``altfusion mc`` and ``report`` for a campaign whose runs record an estimator's ``status``."""
 
 import statistics
+from dataclasses import dataclass
 from pathlib import Path
 
 from altfusion.health_events import (
@@ -69,16 +70,27 @@ def summary_rows(by_run: dict[int, list[HealthEvent]]) -> list[tuple[str, str]]:
     return rows
 
 
-def report_campaign_events(folder: Path, name: str) -> tuple[str, Path]:
-    """The events of the campaign in ``folder`` in words (headed by ``name``) and the CSV
-    written with all of them."""
+@dataclass(frozen=True)
+class CampaignHealth:
+    """What the estimators did over a campaign's runs."""
+
+    events: Path
+    """The CSV of every event of every run (:func:`write_campaign_events`)."""
+    rows: list[tuple[str, str]]
+    """Each estimator's notable events in words (:func:`summary_rows`)."""
+    runs: int
+    """Runs read."""
+
+    def said(self, name: str) -> str:
+        """:attr:`rows` a line per estimator, headed by ``name``."""
+        lines = [f"  {estimator}: {said}" for estimator, said in self.rows] \
+            or [f"  {NONE_NOTABLE}"]
+        return "\n".join([f"{name}: health events of {self.runs} runs"] + lines)
+
+
+def campaign_health(folder: Path, name: str) -> CampaignHealth:
+    """The health events of the campaign in ``folder``, written to ``<name>.events.csv``
+    there and summed up."""
     by_run = campaign_events(folder)
-    path = write_campaign_events(folder, name, by_run)
-    return say_events(name, summary_rows(by_run), len(by_run)), path
-
-
-def say_events(name: str, rows: list[tuple[str, str]], runs: int) -> str:
-    """The :func:`summary_rows` of ``runs`` runs in words, a line per estimator, headed by
-    ``name``."""
-    lines = [f"  {estimator}: {said}" for estimator, said in rows] or [f"  {NONE_NOTABLE}"]
-    return "\n".join([f"{name}: health events of {runs} runs"] + lines)
+    return CampaignHealth(write_campaign_events(folder, name, by_run), summary_rows(by_run),
+                          len(by_run))

@@ -110,20 +110,11 @@ def _rerun(args: argparse.Namespace, source, out: Path) -> int:
 def _print_health(out: Path, name: str) -> None:
     """What the estimators did over the runs of the campaign in ``out`` (where they record
     their status), headed by ``name``, and the CSV written with every event."""
-    from altfusion.montecarlo.campaign_events import records_health, report_campaign_events
+    from altfusion.montecarlo.campaign_events import campaign_health, records_health
 
     if records_health(out):
-        text, path = report_campaign_events(out, name)
-        print(f"{text}\nevery event of every run: {path}")
-
-
-def _print_report_health(name: str, report) -> None:
-    """What the estimators did over the runs of a written report's campaign (where they
-    record their status), headed by ``name``."""
-    from altfusion.montecarlo.campaign_events import say_events
-
-    if report.health is not None:
-        print(say_events(name, report.health, len(report.statistics.runs)))
+        health = campaign_health(out, name)
+        print(f"{health.said(name)}\nevery event of every run: {health.events}")
 
 
 def command_report(args: argparse.Namespace) -> int:
@@ -134,8 +125,9 @@ def command_report(args: argparse.Namespace) -> int:
     for index, reason in sorted(report.statistics.skipped.items()):
         print(f"skipped run {index}: {reason} (altfusion mc --resume re-runs it)")
     print(format_statistics(report.statistics))
-    _print_report_health(report.statistics.manifest["system"]["name"], report)
-    events = f", {report.events}" if report.events else ""
+    if report.health is not None:
+        print(report.health.said(report.statistics.manifest["system"]["name"]))
+    events = f", {report.health.events}" if report.health else ""
     print(f"wrote {report.html}, {report.summary}{events} and {len(report.pngs)} plots")
     return 0
 
@@ -158,7 +150,8 @@ def command_compare(args: argparse.Namespace) -> int:
     page, reports = write_comparison(out, estimators)
     print(format_comparison([(name, report.statistics) for name, report in reports]))
     for name, report in reports:
-        _print_report_health(name, report)
+        if report.health is not None:
+            print(report.health.said(name))
     print(f"wrote {page}")
     return status
 

@@ -15,10 +15,9 @@ from altfusion.montecarlo import plots
 from altfusion.montecarlo.aggregation import CampaignStatistics, aggregate
 from altfusion.montecarlo.campaign_events import (
     NONE_NOTABLE,
-    campaign_events,
+    CampaignHealth,
+    campaign_health,
     records_health,
-    summary_rows,
-    write_campaign_events,
 )
 from altfusion.montecarlo.tables import HEADER, confidence_note, metric_row, statistics_json
 from altfusion.systems.faults import FAULTS
@@ -36,10 +35,9 @@ class Report:
     pngs: list[Path]
     summary: Path
     statistics: CampaignStatistics
-    events: Path | None = None
-    """Every health event of every run (None: the runs record no estimator's status)."""
-    health: list[tuple[str, str]] | None = None
-    """Each estimator's notable events over the runs, in words (None: no status recorded)."""
+    health: CampaignHealth | None = None
+    """What the estimators did over the runs, every event in a CSV (None: the runs record no
+    estimator's status)."""
 
 
 def esc(value: object) -> str:
@@ -94,20 +92,17 @@ def write_report(out: Path) -> Report:
     write_text(summary, json.dumps(statistics_json(statistics), indent=2) + "\n")
     if statistics.metrics:
         write_profiles_csv(statistics, out / "rms_vs_time.csv")
-    events = health = None
-    if records_health(out):
-        by_run = campaign_events(out)
-        events = write_campaign_events(out, statistics.manifest["system"]["name"], by_run)
-        health = summary_rows(by_run)
+    health = campaign_health(out, statistics.manifest["system"]["name"]) \
+        if records_health(out) else None
     page = out / "report.html"
     write_text(page, render(statistics, pngs, out, health))
-    return Report(page, pngs, summary, statistics, events, health)
+    return Report(page, pngs, summary, statistics, health)
 
 
 def render(statistics: CampaignStatistics, pngs: list[Path], out: Path,
-           health: list[tuple[str, str]] | None = None) -> str:
-    """The report page of the campaign in ``out`` (``health``: each estimator's notable
-    events over the runs, None where no status is recorded)."""
+           health: CampaignHealth | None = None) -> str:
+    """The report page of the campaign in ``out`` (``health``: what the estimators did over
+    the runs, None where no status is recorded)."""
     manifest = statistics.manifest
     system = manifest["system"]
     parts = [f"<h1>Monte Carlo campaign: {esc(system['name'])}</h1>",
@@ -120,7 +115,7 @@ def render(statistics: CampaignStatistics, pngs: list[Path], out: Path,
                  f"interval of a zero-mean Gaussian error's σ at each output time (log axis: "
                  f"a 0.4 m band stays visible beside a 500 m one).</p>")
     parts += [image(path) for path in pngs]
-    parts += [worst_runs_section(statistics, out), health_section(statistics, health),
+    parts += [worst_runs_section(statistics, out), health_section(health),
               failures_section(statistics),
               system_section(manifest), versions_section(manifest)]
     body = "\n".join(part for part in parts if part)
@@ -172,19 +167,17 @@ def worst_runs_section(statistics: CampaignStatistics, out: Path) -> str:
             + table(("metric", "run", "RMS", "seeds", "re-run alone"), rows))
 
 
-def health_section(statistics: CampaignStatistics,
-                   health: list[tuple[str, str]] | None) -> str:
+def health_section(health: CampaignHealth | None) -> str:
     """What each estimator did over the runs (:mod:`.campaign_events`), with where every
     event of every run is."""
     if health is None:
         return ""
-    name = statistics.manifest["system"]["name"]
-    body = table(("estimator", "in how many runs, first time's median"), health) if health \
-        else f"<p>{esc(NONE_NOTABLE)}.</p>"
+    body = table(("estimator", "in how many runs, first time's median"), health.rows) \
+        if health.rows else f"<p>{esc(NONE_NOTABLE)}.</p>"
     return (f"<h2>Health events over the runs</h2>{body}"
             f'<p class="note">Read off each run\'s recorded health outputs (docs: estimator '
             f"health); every event of every run, rejections included, in "
-            f"<code>{esc(name)}.events.csv</code>; a run's in words: "
+            f"<code>{esc(health.events.name)}</code>; a run's in words: "
             f"<code>altfusion mc ... --run I</code>.</p>")
 
 

@@ -27,6 +27,7 @@ from altfusion.constants import G0, ISA_LAPSE_RATE, ISA_P0, ISA_T0, ISA_TROPOPAU
 from altfusion.errors import ParameterError
 from altfusion.params import param
 from altfusion.physics.barometric import pressure_at, temperature_at
+from altfusion.physics.gauss_markov import gauss_markov_step
 from altfusion.tables import parse_table
 from altfusion.timegrid import TickClock
 
@@ -85,9 +86,7 @@ class Atmosphere(Component):
         )
         if p.T0 + p.lapse_rate * ISA_TROPOPAUSE_H <= 0:
             raise ParameterError("lapse_rate", p.lapse_rate, "gives T <= 0 K below 11 km")
-        # The gust's exact discretization over one tick: g <- phi g + gust_std sqrt(1 - phi²) n
-        self._gust_phi = math.exp(-clock.step_size / p.gust_time_constant)
-        self._gust_scale = p.gust_std * math.sqrt(1.0 - self._gust_phi * self._gust_phi)
+        self._gust_phi = math.exp(-clock.step_size / p.gust_time_constant)   # over one tick
 
     def reset(self) -> None:
         p = self.params
@@ -108,9 +107,8 @@ class Atmosphere(Component):
                 self._lapse_rng.standard_normal()
             )
         if p.gust_std > 0:
-            self.gust = self._gust_phi * self.gust + self._gust_scale * (
-                self._gust_rng.standard_normal()
-            )
+            self.gust = gauss_markov_step(self.gust, self._gust_phi, p.gust_std,
+                                          self._gust_rng.standard_normal())
         self._evaluate()
 
     def _evaluate(self) -> None:

@@ -34,6 +34,7 @@ import numpy as np
 
 from altfusion.errors import ParameterError
 from altfusion.params import param
+from altfusion.physics.gauss_markov import gauss_markov_step
 from altfusion.sensors.sampling import Sample, SampledSensor, SamplingParams, require_finite
 from altfusion.tables import parse_table
 from altfusion.timegrid import TickClock
@@ -190,14 +191,14 @@ class GnssReceiver(SampledSensor):
         return self._nsat, p.vdop * math.sqrt(p.nsat / self._nsat)
 
     def _advance_gauss_markov(self) -> float:
-        """e ← φe + σ√(1-φ²)·n with φ = exp(-Δt/τ): exact discretization, stationary σ."""
+        """The Gauss-Markov height error after the time since its last step."""
         p = self.params
         clock = self.clock
         elapsed = (clock.ticks - self._gm_tick) * clock.step_size          # ticks_since()
         phi = math.exp(-elapsed / p.gm_time_constant)
         self._gm_tick = clock.ticks
-        draw = self.normal["gauss_markov"].draw()
-        self._gm_error = phi * self._gm_error + p.gm_std * math.sqrt(1.0 - phi * phi) * draw
+        self._gm_error = gauss_markov_step(self._gm_error, phi, p.gm_std,
+                                           self.normal["gauss_markov"].draw())
         return self._gm_error
 
     def in_outage(self, t: float) -> bool:
