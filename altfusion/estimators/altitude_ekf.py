@@ -507,6 +507,16 @@ class AltitudeEKF(Estimator):
         row = [(H, 1.0), (V, -delta), (BA, -0.5 * delta * delta)]
         return x[H] - delta * x[V] + 0.5 * delta * delta * a, x[V] - delta * a, row, delta
 
+    def _innovation(self, source: str, z: float, stamp: float, R: float
+                    ) -> tuple[float, float, list[tuple[int, float]], list[tuple[int, float]]]:
+        """A height sample's innovation y = z - h(x(s)) at its stamp s, its variance
+        S = H P Hᵀ + R + the slow error's share in S (:meth:`_slow_shares`), its Jacobian
+        row H and that of h(s) (``R``: the sample's noise variance in use)."""
+        h_s, _, row_h, _ = self._back(stamp)
+        predicted, row = self._model(source, h_s, row_h)
+        return (z - predicted, quadratic_form(self.P, row) + R + self._slow_shares(source)[1],
+                row, row_h)
+
     def _model(self, source: str, h_s: float, row_h) -> tuple[float, list[tuple[int, float]]]:
         """The predicted measurement of a height source and its Jacobian row."""
         x, ref = self.x, self.params.height_ref
@@ -550,13 +560,10 @@ class AltitudeEKF(Estimator):
             return
         if self._first_sample(source, z, R):
             return
-        h_s, _, row_h, _ = self._back(stamp)
-        predicted, row = self._model(source, h_s, row_h)
-        y = z - predicted
+        y, S, row, row_h = self._innovation(source, z, stamp, R)
         if source == "baro":
             y = self._ground_effect(y)
         slow_R, slow_S = self._slow_shares(source)
-        S = quadratic_form(self.P, row) + R + slow_S
         if source in ("radar", "laser") and self._terrain_step(source, y, S, row_h, R):
             return
         if source == self._reference:
@@ -663,11 +670,9 @@ class AltitudeEKF(Estimator):
                 and y * y > p.gate_sigma**2 * S):
             return False
         z, stamp, sigma = self._reference_sample
-        h_s, _, row_h, _ = self._back(stamp)
-        predicted, row = self._model(self._reference, h_s, row_h)
-        S_ref = quadratic_form(self.P, row) + self._noise_variance(self._reference, sigma) \
-            + self._slow_shares(self._reference)[1]
-        self._reset_to_reference(z - predicted, S_ref)
+        y_ref, S_ref, _, _ = self._innovation(self._reference, z, stamp,
+                                              self._noise_variance(self._reference, sigma))
+        self._reset_to_reference(y_ref, S_ref)
         return True
 
     def _reset_to_reference(self, y: float, S: float) -> None:
