@@ -11,6 +11,7 @@ from altfusion.estimators.kalman import (
     inflate_along,
     joseph,
     joseph_first_of_two,
+    limit_variance,
     measurement_prior,
     move_datum,
     predict,
@@ -123,6 +124,11 @@ def _bits(values) -> bytes:
     return np.asarray(values, dtype=float).tobytes()
 
 
+def _correlations(P: np.ndarray) -> np.ndarray:
+    deviations = np.sqrt(np.diag(P))
+    return P / np.outer(deviations, deviations)
+
+
 def _random_covariance(rng, n: int) -> np.ndarray:
     A = rng.standard_normal((n, n)) * 10 ** rng.uniform(-2, 2)
     return A @ A.T + 1e-3 * np.eye(n)
@@ -225,6 +231,25 @@ def test_an_inflation_along_a_direction_leaves_the_orthogonal_combinations():
     d = np.array([1.0, -1.0, 0.0])
     assert d @ np.array(P_new) @ d == pytest.approx(d @ P @ d, rel=1e-12)
     assert P_new[2] == list(P[2])
+
+
+def test_a_limited_variance_keeps_the_correlations_and_the_other_states():
+    """A variance above the limit is brought to it with its correlation coefficients kept (P
+    stays positive definite); the other states' block is untouched; one at or below the
+    limit is left as it was, bit for bit."""
+    P = _random_covariance(np.random.default_rng(31), 4)
+    P[2] *= 30.0
+    P[:, 2] *= 30.0                           # Var x_2 = 900 x what the draw gave
+    limited = P.copy()
+    limit_variance(limited, 2, 1.0)
+    assert limited[2, 2] == pytest.approx(1.0, rel=1e-15)
+    np.testing.assert_allclose(_correlations(limited), _correlations(P), rtol=1e-12)
+    others = [0, 1, 3]
+    assert np.array_equal(limited[np.ix_(others, others)], P[np.ix_(others, others)])
+    assert np.all(np.linalg.eigvalsh(limited) > 0.0)
+    kept = P.copy()
+    limit_variance(kept, 2, P[2, 2])
+    assert np.array_equal(kept, P)
 
 
 def test_scalar_component_updates_one_by_one_are_the_joint_matrix_update():

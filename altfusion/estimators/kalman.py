@@ -15,6 +15,7 @@ sums and fuses its products in its own order.
 # ruff: noqa: B905  (the scalar forms zip sequences of equal lengths by construction; a
 # zip(..., strict=...) is a keyword call, which costs more than a short row's arithmetic)
 
+import math
 from collections.abc import Sequence
 from functools import cache
 from itertools import repeat
@@ -280,6 +281,19 @@ def move_datum(P, index: int, direction: Sequence[float], variance: float) -> No
         P_a = P[a]
         for b, u_b in enumerate(direction):
             P_a[b] = P_a[b] - (u_a * row[b] + u_b * row[a]) + u_a * u_b * base
+
+
+def limit_variance(P: np.ndarray, index: int, maximum: float) -> None:
+    """In place: the variance of state ``index`` held at most ``maximum``, by scaling its row
+    and column of P by √(maximum/P_ii) (P ← D P D, D = I but that factor at ``index``: P
+    stays positive semi-definite and every correlation coefficient as it was). PX4 EKF2
+    bounds its state variances the same way in ``constrainStateVariances`` (the
+    accelerometer bias's at 1 (m/s²)², there by fusing a zero innovation)."""
+    variance = P[index, index]
+    if variance > maximum:
+        scale = math.sqrt(maximum / variance)
+        P[index, :] *= scale
+        P[:, index] *= scale
 
 
 def inflate_along(P, direction: Sequence[float], variance: float) -> None:

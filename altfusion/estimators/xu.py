@@ -48,7 +48,8 @@ Deviations from the paper (the reasons in docs/estimators.md):
   most samples of the healthy sensors, a rejected sample does not feed R̂, and the estimate
   drifted with an overconfident h_std (issue 29; docs/estimators.md);
 * γ = 16 (not given in the paper); strong tracking scales h, vz and b_a, and ε_b only on a
-  baro sample, at most ``MAX_FADING`` per step;
+  baro sample, at most ``MAX_FADING`` per step, and b_a's variance is then held at most
+  ``MAX_ACC_BIAS_VARIANCE`` (PX4 EKF2's bound);
 * gate: a sample with v² > ``gate_sigma``²·(H P⁻ Hᵀ + R̂) is rejected (its innovation still
   enters the window of step 2); after ``max_rejections`` consecutive rejections the active
   height source is re-acquired, unless another source contradicts it (estimators/base.py);
@@ -70,13 +71,22 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from altfusion.estimators.base import Estimator, HealthParams, Verdict
-from altfusion.estimators.kalman import dense_row, measurement_prior, predict, shift_state, update
+from altfusion.estimators.kalman import (
+    dense_row,
+    limit_variance,
+    measurement_prior,
+    predict,
+    shift_state,
+    update,
+)
 from altfusion.estimators.streams import ACC, BARO, GPS, LASER, Stream
 from altfusion.params import param
 
 BARO_SOURCE, LASER_SOURCE = 0, 1
 N = 4
 """States: h, vz, b_a, ε_b."""
+ACC_BIAS = 2
+"""The index of b_a, the accelerometer bias."""
 BARO_OFFSET = 3
 """The index of ε_b, the barometer's slow error."""
 ALTITUDE_ROW = ((0, 1.0),)
@@ -89,6 +99,9 @@ MIN_VARIANCE = 1e-12
 """Floor of H P⁻ Hᵀ in the strong-tracking factor, m²."""
 MAX_FADING = 1000.0
 """Largest λ of one strong-tracking step (eq. 24); a larger mismatch takes a few samples."""
+MAX_ACC_BIAS_VARIANCE = 1.0
+"""Largest variance of the accelerometer bias b_a after strong tracking, m²/s⁴ (PX4 EKF2's
+bound on its accelerometer bias variance): see :meth:`XuSHAEKF._strong_tracking`."""
 NOISE_FLOOR = 0.25
 """Floor of a noise estimate R̂ (eq. 22) as a fraction of its nominal R: a sensor is taken to
 be at most twice as precise (in σ) as stated. Without it identical samples drive R̂ to 0
@@ -306,10 +319,17 @@ class XuSHAEKF(Estimator):
         P⁻ positive definite). The baro's slow error ε_b is not inflated, even on a baro
         sample: in a steady hover H P⁻ Hᵀ is tiny and λ reaches hundreds, and an inflated ε_b
         let the baro sample fix only the sum h + ε_b, so that the next GPS sample moved h by
-        nearly its own error (6-7 m spikes above 25 m in the xu2016 reproduction)."""
+        nearly its own error (6-7 m spikes above 25 m in the xu2016 reproduction).
+
+        b_a's variance is then held at most :data:`MAX_ACC_BIAS_VARIANCE` (a deviation:
+        :func:`~altfusion.estimators.kalman.limit_variance`). The height sources see b_a only
+        through its double integral, so its inflation compounds from sample to sample while
+        the innovations stay large: told noises 40x too small (the defaults on a 20 m baro),
+        it grew until one GNSS sample set b_a to hundreds of m/s² (docs/estimators.md)."""
         factor = min(MAX_FADING, max(1.0, (innovation_sq - R) / max(hph, MIN_VARIANCE)))
         root = np.where(MOTION_STATES, math.sqrt(factor), 1.0)
         self.P = self.P * np.outer(root, root)
+        limit_variance(self.P, ACC_BIAS, MAX_ACC_BIAS_VARIANCE)
         self.strong_tracking_factor = factor
         self.n_strong_tracking += 1
 
