@@ -466,7 +466,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'WhangGAEstimator': '43cf236684593fbe',
         'BaoDriftEstimator': 'f2fc439c7f20e3a2',
         'YangFusionKF': '679ce0f6abaf34e8',
-        'XuSHAEKF': '5a840fc686f668dc',
+        'XuSHAEKF': '55c17c7b4f0dea04',
         'AltitudeEKF': '3276240337faa4e3',
     },
     ('range_terrain', False): {
@@ -475,7 +475,7 @@ CHECKSUMS: dict[tuple[str, bool], dict[str, str]] = {
         'WhangGAEstimator': '444789511cc5af21',
         'BaoDriftEstimator': 'f2fc439c7f20e3a2',
         'YangFusionKF': '628be5bf078c3b94',
-        'XuSHAEKF': 'a5ddb8a4b0a628cd',
+        'XuSHAEKF': 'e98cdb088d3ac679',
         'AltitudeEKF': '086a1b3fb87f54b2',
     },
     ('weather_front', True): {
