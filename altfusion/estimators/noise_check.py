@@ -189,12 +189,15 @@ def lower_bound_factor(dof: int) -> float:
 class NoiseCheck:
     """The noise factor of one source: :attr:`factor` multiplies its stated variance R."""
 
-    __slots__ = ("source", "window", "maximum", "minimum", "stated", "ratio", "scatter",
-                 "factor", "peak", "rise", "pairs", "_last")
+    __slots__ = ("source", "window", "maximum", "minimum", "stated", "flagged", "ratio",
+                 "scatter", "factor", "peak", "rise", "pairs", "_last")
 
     def __init__(self, source: AidSource, window: float, maximum: float,
-                 stated: bool = True) -> None:
+                 stated: bool = True, flagged: float = FLAGGED) -> None:
         self.source = source
+        self.flagged = flagged
+        """The factor beyond which a stated noise is flagged (:data:`FLAGGED`; higher for a
+        filter whose innovations are not white)."""
         self.window = window
         """Pairs in the exponential window of the ratio's average."""
         self.stated = stated
@@ -239,7 +242,7 @@ class NoiseCheck:
             scatter = difference * difference * self.factor / (noise + last[2])
             self.scatter += (min(scatter, CLIP) - self.scatter) / pairs
             self.factor = min(max(self.ratio, self.minimum), self.maximum)
-            self.source.mark_inflated(self.factor > FLAGGED and self.pairs >= MIN_PAIRS)
+            self.source.mark_inflated(self.factor > self.flagged and self.pairs >= MIN_PAIRS)
             self.source.noisy = self.ratio > NOISY and self.pairs < self.window
         else:
             # against each sample's R without the factor (it changes from pair to pair while
@@ -274,10 +277,10 @@ class NoiseCheck:
         ratio's one-sided CONFIDENCE interval, m·k/χ²_k(CONFIDENCE), at most the factor f
         in use (the samples were weighted by no more), once beyond :data:`FLAGGED`; 1 before
         (the statement stands)."""
-        if self.factor <= FLAGGED:          # so is the bound, at most f
+        if self.factor <= self.flagged:     # so is the bound, at most f
             return 1.0
         bound = min(self.ratio * lower_bound_factor(self._dof()), self.factor)
-        return bound if bound > FLAGGED else 1.0
+        return bound if bound > self.flagged else 1.0
 
     def _pair(self, innovation: float, variance: float, clip: float, noise: float,
               ) -> float | None:

@@ -56,7 +56,9 @@ Deviations from the paper (the reasons in docs/estimators.md):
 * health (estimators/base.py): a height source rejected for ``reset_timeout`` while another
   agrees is isolated; with no source fused for that long the height resets; an isolated
   barometer with a constant offset is re-admitted with ε_b reset onto it (:meth:`reset_offset`;
-  docs/estimators.md).
+  docs/estimators.md); in the adaptive filter, the baro's and the laser's nominal R in eqs.
+  (23)-(24) is replaced by the noise their innovations show once that is beyond
+  ``CHECK_FLAGGED`` times it (:meth:`_nominal`, the shared noise check).
 
 Scenarios (Section 3): profiles ``xu_hover15``, ``xu_hover35`` and ``xu_multipoint`` (bounds of
 Section 3.2: error ≤ 1 m below 25 m, ≤ 1.2 m above, 1.1 / 1.5 m with wind grade 3); realistic
@@ -79,6 +81,7 @@ from altfusion.estimators.kalman import (
     shift_state,
     update,
 )
+from altfusion.estimators.noise_check import NoiseCheck
 from altfusion.estimators.streams import ACC, BARO, GPS, LASER, Stream
 from altfusion.params import param
 
@@ -102,6 +105,18 @@ MAX_FADING = 1000.0
 MAX_ACC_BIAS_VARIANCE = 1.0
 """Largest variance of the accelerometer bias b_a after strong tracking, m²/s⁴ (PX4 EKF2's
 bound on its accelerometer bias variance): see :meth:`XuSHAEKF._strong_tracking`."""
+CHECK_WINDOW = 100.0
+"""Pairs of successive innovations in the window of each sensor's noise check (the fault
+layer's: :meth:`XuSHAEKF._nominal`)."""
+CHECK_MAXIMUM = 1e4
+"""Largest factor of a noise check on a nominal R (σ a hundredfold: a 0.5 m baro stated for
+a 20-50 m one)."""
+CHECK_FLAGGED = 16.0
+"""A noise check's factor beyond which the nominal R is replaced (σ shown beyond four times
+the stated): strong tracking's corrections make successive innovations of this filter
+correlated, and for sensors as told the checks' ratio reached 1.2-4.4 over ten fault-flight
+runs, where :data:`~altfusion.estimators.noise_check.FLAGGED` (4) is meant for a consistent
+filter; a noise told 5x too small shows 25-71."""
 NOISE_FLOOR = 0.25
 """Floor of a noise estimate R̂ (eq. 22) as a fraction of its nominal R: a sensor is taken to
 be at most twice as precise (in σ) as stated. Without it identical samples drive R̂ to 0
@@ -221,6 +236,12 @@ class XuSHAEKF(Estimator):
             "baro": Channel(p.R_baro, p.b_baro, deque(maxlen=p.innovation_window)),
             "laser": Channel(p.R_laser, p.b_laser, deque(maxlen=p.innovation_window)),
         }
+        self.noise_checks = {name: NoiseCheck(self.aid[name], CHECK_WINDOW, CHECK_MAXIMUM,
+                                              flagged=CHECK_FLAGGED)
+                             for name in ("baro", "laser")} \
+            if p.fault_detection and p.adaptive else {}
+        """The noise check of each height source that strong tracking watches (the fault
+        layer's, for the adaptive filter: :meth:`_nominal`)."""
         self.height_source = BARO_SOURCE
         self._last_laser_time = -math.inf
         self.strong_tracking_factor = 1.0
@@ -292,7 +313,12 @@ class XuSHAEKF(Estimator):
             channel.weight = 1.0 if ratio <= p.weight_c else (p.weight_c / ratio) ** 2
         C = hph + channel.R_hat
         active = name != "gps"
-        if self.gate(self.aid[name], innovation, C, p.gate_sigma) is not Verdict.FUSED:
+        verdict = self.gate(self.aid[name], innovation, C, p.gate_sigma)
+        check = self.noise_checks.get(name)
+        if check is not None:                   # judged with the noise it has found so far
+            R_checked = channel.R_nominal * check.factor
+            check.gated(innovation, hph + R_checked, R_checked)
+        if verdict is not Verdict.FUSED:
             channel.rejections += 1
             if not (active and channel.rejections > p.max_rejections
                     and not self.contradicted(self.aid[name], innovation)):
@@ -302,14 +328,33 @@ class XuSHAEKF(Estimator):
             self.accept(self.aid[name])
             channel.window.clear()
             channel.weight = 1.0
+            if check is not None:
+                check.forget()
         channel.rejections = 0
         if p.adaptive:
             channel.estimate_noise(innovation, hph)                             # (22), (28)
-            if active and innovation**2 > p.gamma * (hph + channel.R_nominal):   # (23)
-                self._strong_tracking(innovation**2, channel.R_nominal, hph)     # (24)
+            R_k = self._nominal(name)
+            if active and innovation**2 > p.gamma * (hph + R_k):                # (23)
+                self._strong_tracking(innovation**2, R_k, hph)                   # (24)
         result = update(self.x, self.P, z, dense_row(H, N), channel.R_hat,
                         gain_scale=channel.weight)                              # (25)-(27)
         self.x, self.P = result.x, result.P
+
+    def _nominal(self, name: str) -> float:
+        """R_k of height source ``name`` in the convergence test of eq. (23) and the factor λ
+        of eq. (24): its nominal R or, in the fault layer, the noise its innovations show
+        once that is beyond :data:`CHECK_FLAGGED` times the nominal (its noise check's factor;
+        the source's ``NOISE_INFLATED`` bit: a deviation). A nominal R far below the sensor's
+        noise makes eq. (23) fail on the noise itself: strong tracking then inflates P⁻ sample
+        after sample, and the gate, sized by that P⁻, lets a failed sensor's step in (told
+        nothing on the fault flight, a 20 m baro for the default's 0.5 m followed its +200 m
+        failure in one run of ten; docs/estimators.md). Eqs. (15)-(17) keep the nominal R:
+        their weight is what tells a sensor that became noisier (a failing GPS) from one that
+        was always so."""
+        nominal = self.channels[name].R_nominal
+        check = self.noise_checks.get(name)
+        return nominal * check.factor if check is not None and check.factor > check.flagged \
+            else nominal
 
     def _strong_tracking(self, innovation_sq: float, R: float, hph: float) -> None:
         """Eq. (24): P⁻ ← λ P⁻ with λ = max(1, (v² - R)/H P⁻ Hᵀ), at most MAX_FADING.
@@ -345,12 +390,17 @@ class XuSHAEKF(Estimator):
 
     def reset_height(self, source: str, innovation: float, variance: float) -> None:
         shift_state(self.x, self.P, 0, innovation, variance)
+        for check in self.noise_checks.values():     # the prediction moved between samples
+            check.forget()
 
     def reset_offset(self, source: str, innovation: float, variance: float) -> bool:
         """The barometer's offset ε_b (an isolated baro re-admitted, estimators/base.py)."""
         if source != "baro":
             return False
         shift_state(self.x, self.P, BARO_OFFSET, innovation, variance)
+        check = self.noise_checks.get("baro")
+        if check is not None:
+            check.forget()
         return True
 
     def _publish(self) -> None:
