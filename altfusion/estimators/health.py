@@ -76,8 +76,9 @@ class SourceBit(IntEnum):
     another height source that pins the height tighter was fused, or (AltitudeEKF) any
     source whose reading is stuck (:mod:`~altfusion.estimators.stuck`)."""
     NOISE_INFLATED = 3
-    """The source's stated noise is found too small for its innovations and its variance
-    inflated more than fourfold (the sources of :data:`NOISE_CHECKED` only;
+    """The source's stated noise is found too small for its innovations: AltitudeEKF's
+    variance inflated more than fourfold, XuSHAEKF's nominal R (baro, laser) replaced beyond
+    16 times (the sources of :data:`NOISE_CHECKED` only;
     :mod:`~altfusion.estimators.noise_check`)."""
 
 
