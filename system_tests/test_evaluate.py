@@ -23,6 +23,8 @@ SCENARIOS = "bao2017,xu2016_hover15"
 
 
 def evaluate(out, *extra: str) -> subprocess.CompletedProcess:
+    """``altfusion evaluate`` of this module's tiny evaluation into ``out``; an option in
+    ``extra`` replaces the one given here (the last of a repeated option counts)."""
     return subprocess.run(
         [sys.executable, "-m", "altfusion.cli", "evaluate", "--runs", "2", "--estimators",
          ESTIMATORS, "--scenarios", SCENARIOS, "--stop", "20", "--backend", "fmu",
@@ -296,12 +298,8 @@ def test_xushaekf_told_nothing_on_the_fault_flight_stays_within_five_baro_sigmas
     accelerometer bias's variance was bounded that variance compounded until a GNSS sample
     set the bias to hundreds of m/s²: the height 8.9 km off in run 5 and 122 m in run 0,
     valid, at an h_std of metres. Now every run stays within five of the baro's σ."""
-    completed = subprocess.run(
-        [sys.executable, "-m", "altfusion.cli", "evaluate", "--runs", "6", "--estimators",
-         "XuSHAEKF", "--scenarios", "early_late_samples", "--told", "nothing", "--stop", "120",
-         "--backend", "fmu", "--workers", "2", "--models", str(MODELS), "--out",
-         str(tmp_path), "--quiet"],
-        capture_output=True, text=True, timeout=600, cwd=ROOT)
+    completed = evaluate(tmp_path, "--runs", "6", "--estimators", "XuSHAEKF", "--scenarios",
+                         "early_late_samples", "--told", "nothing", "--stop", "120")
     assert completed.returncode == 0, completed.stderr[-3000:]
     folder = tmp_path / "nothing" / "early_late_samples"
     assert finished_runs(folder) == list(range(6))

@@ -242,7 +242,7 @@ class NoiseCheck:
             scatter = difference * difference * self.factor / (noise + last[2])
             self.scatter += (min(scatter, CLIP) - self.scatter) / pairs
             self.factor = min(max(self.ratio, self.minimum), self.maximum)
-            self.source.mark_inflated(self.factor > self.flagged and self.pairs >= MIN_PAIRS)
+            self.source.mark_inflated(self.beyond_flag and self.pairs >= MIN_PAIRS)
             self.source.noisy = self.ratio > NOISY and self.pairs < self.window
         else:
             # against each sample's R without the factor (it changes from pair to pair while
@@ -257,6 +257,12 @@ class NoiseCheck:
         told = self.factor if not self.stated else self._shown()
         if told > self.peak:
             self.rise, self.peak = told / self.peak, told
+
+    @property
+    def beyond_flag(self) -> bool:
+        """Whether the factor in use exceeds :attr:`flagged` (the ``NOISE_INFLATED`` bit also
+        waits for :data:`MIN_PAIRS` pairs)."""
+        return self.factor > self.flagged
 
     def unshown(self) -> float:
         """The share of a stated noise's variance (of the typical one, for a noise not
@@ -277,7 +283,7 @@ class NoiseCheck:
         ratio's one-sided CONFIDENCE interval, m·k/χ²_k(CONFIDENCE), at most the factor f
         in use (the samples were weighted by no more), once beyond :data:`FLAGGED`; 1 before
         (the statement stands)."""
-        if self.factor <= self.flagged:     # so is the bound, at most f
+        if not self.beyond_flag:            # nor is the bound, at most f
             return 1.0
         bound = min(self.ratio * lower_bound_factor(self._dof()), self.factor)
         return bound if bound > self.flagged else 1.0

@@ -353,8 +353,7 @@ class XuSHAEKF(Estimator):
         was always so."""
         nominal = self.channels[name].R_nominal
         check = self.noise_checks.get(name)
-        return nominal * check.factor if check is not None and check.factor > check.flagged \
-            else nominal
+        return nominal * check.factor if check is not None and check.beyond_flag else nominal
 
     def _strong_tracking(self, innovation_sq: float, R: float, hph: float) -> None:
         """Eq. (24): P⁻ ← λ P⁻ with λ = max(1, (v² - R)/H P⁻ Hᵀ), at most MAX_FADING.
