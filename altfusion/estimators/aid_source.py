@@ -105,7 +105,7 @@ class AidSource:
     __slots__ = ("name", "height", "fused_mask", "rejected_mask", "isolated_mask",
                  "inflated_mask", "test_ratio", "rejected", "innovation", "variance",
                  "gate_width", "window", "last_fused", "last_gated", "rejected_since", "biased",
-                 "noisy", "bits")
+                 "noisy", "shown", "bits")
 
     def __init__(self, name: str) -> None:
         self.name = name
@@ -140,6 +140,10 @@ class AidSource:
         """Its noise is still being learnt, found well above the stated or not stated
         (:mod:`~altfusion.estimators.noise_check`): its rejections may be its noise's, so it
         is neither isolated nor rejected by the bias test for them."""
+        self.shown = None
+        """The fault layer's check of a paper filter's stated noise against its innovations
+        (:class:`~altfusion.estimators.noise_check.ShownNoise`; None: unchecked, or checked
+        by the estimator itself)."""
         self.bits = 0
         """This source's bits of ``status``."""
 

@@ -245,6 +245,7 @@ class AltitudeEKF(Estimator):
 
     Params = AltitudeEKFParams
     streams = (BARO_ALL, GPS_ALL, RADAR, LASER, ACC)
+    checks_own_noise = True                      # its noise checks inflate R (adaptive_noise)
 
     def configure(self, clock) -> None:
         p = self.params

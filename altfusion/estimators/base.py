@@ -41,6 +41,7 @@ from altfusion.estimators.aid_source import AidSource, Verdict
 from altfusion.estimators.gating import Gating
 from altfusion.estimators.health import (
     HEIGHT_SOURCES,
+    NOISE_CHECKED,
     STEP_BITS,
     SourceBit,
     Status,
@@ -49,6 +50,7 @@ from altfusion.estimators.health import (
 )
 from altfusion.estimators.health_params import HealthParams
 from altfusion.estimators.intake import SampleIntake
+from altfusion.estimators.noise_check import ShownNoise
 from altfusion.estimators.streams import Stream, stream_inputs, stream_sources
 
 __all__ = ["HEIGHT_SOURCES", "MAX_DELAY", "AidSource", "Estimator", "HealthParams",
@@ -84,6 +86,12 @@ class Estimator(SampleIntake, Gating, Component):
     """Sources the algorithm cannot do without -> why (xu2016's accelerometer, its model's
     input): ``h_valid`` is false while one has delivered nothing for ``aiding_timeout``."""
 
+    checks_own_noise: ClassVar[bool] = False
+    """The estimator checks its sources' stated noise itself (AltitudeEKF, XuSHAEKF:
+    :class:`~altfusion.estimators.noise_check.NoiseCheck`); else, with ``fault_detection``,
+    the fault layer checks them against the filter's innovations
+    (:class:`~altfusion.estimators.noise_check.ShownNoise`)."""
+
     stated_aliases: ClassVar[dict[str, str]] = {}
     """A sensor error model's stated name (``baro_bias_psd``... of
     :mod:`altfusion.systems.error_models`) -> this estimator's parameter of the same quantity
@@ -102,8 +110,18 @@ class Estimator(SampleIntake, Gating, Component):
         self.declare_inputs()
         self.h_est = 0.0
         self.vz_est = 0.0
+        self.std_factor = 1.0
         self.h_std = 0.0
         super().__init__(params, **kwargs)
+
+    @property
+    def h_std(self) -> float:
+        """The published ``h_std``: the filter's, times √:attr:`std_factor`."""
+        return self._h_std * math.sqrt(self.std_factor)
+
+    @h_std.setter
+    def h_std(self, value: float) -> None:
+        self._h_std = value
 
     @classmethod
     def sources(cls) -> tuple[str, ...]:
@@ -137,6 +155,14 @@ class Estimator(SampleIntake, Gating, Component):
         self.aid_sources = tuple(AidSource(source) for source in self.sources())
         self.aid = {source.name: source for source in self.aid_sources}
         """The aid sources by name."""
+        self.std_factor = 1.0
+        """The factor on the filter's variance of ``h`` in the published ``h_std``: the
+        largest the sources' innovations show their stated noise too small by (fault layer,
+        :class:`~altfusion.estimators.noise_check.ShownNoise`; 1: as the filter computes)."""
+        if self.params.fault_detection and not self.checks_own_noise:
+            for source in self.aid_sources:
+                if source.name in NOISE_CHECKED:
+                    source.shown = ShownNoise(source)
         self._heights = tuple(source for source in self.aid_sources if source.height)
         self._last_aiding = -math.inf
         self._started_at = math.inf

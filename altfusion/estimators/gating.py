@@ -22,12 +22,20 @@ class Gating:
     def gate(self, source: AidSource, innovation: float, variance: float, sigmas: float,
              aids_height: bool = True) -> Verdict:
         """The innovation gate of ``source``: test ratio y²/(g²·S) (PX4) with g = ``sigmas``
-        standard deviations of the innovation variance S (``sigmas <= 0``: no gate, ratio 0).
+        standard deviations of the innovation variance S (``sigmas <= 0``: no gate, ratio 0;
+        S times the noise the source's innovations show, :attr:`AidSource.shown`, while it is
+        shown too small).
         ``aids_height`` false: the source calibrates another (its fusion does not keep
         ``h_valid`` true). With ``fault_detection`` a sample failing the bias test is
         rejected too (unless the source's noise is found too small:
         :attr:`AidSource.noisy`), and a rejected one may reset the state or re-reference its
         source."""
+        shown = source.shown
+        if shown is not None:
+            shown.gated(innovation, variance)
+            if shown.factor != 1.0 or self.std_factor != 1.0:
+                variance *= shown.factor
+                self._show_noise()
         if sigmas > 0.0:
             ratio = innovation * innovation / (sigmas * sigmas * max(variance, 1e-300))
         else:
@@ -50,6 +58,11 @@ class Gating:
             if verdict is not None:
                 return verdict
         return self._reject(source, innovation, ratio, biased)
+
+    def _show_noise(self) -> None:
+        """:attr:`std_factor` from the noise factors the sources' innovations show."""
+        self.std_factor = max(source.shown.factor for source in self.aid_sources
+                              if source.shown is not None)
 
     def restart_without(self, name: str) -> None:
         """Start the filter afresh without source ``name``, found stuck since before the

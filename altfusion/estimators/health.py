@@ -78,7 +78,8 @@ class SourceBit(IntEnum):
     NOISE_INFLATED = 3
     """The source's stated noise is found too small for its innovations: AltitudeEKF's
     variance inflated more than fourfold, XuSHAEKF's nominal R (baro, laser) replaced beyond
-    16 times (the sources of :data:`NOISE_CHECKED` only;
+    16 times; the other estimators (fault layer) show it more than twice too small, their
+    gate and published ``h_std`` widened by it (the sources of :data:`NOISE_CHECKED` only;
     :mod:`~altfusion.estimators.noise_check`)."""
 
 

@@ -307,3 +307,60 @@ class NoiseCheck:
     def forget(self) -> None:
         """The next sample starts a new pair (after a reset, a re-referencing or a gap)."""
         self._last = None
+
+
+SHOWN = 2.0
+"""A paper filter's stated noise is taken as shown too small (:class:`ShownNoise`) while the
+lower bound of the true ratio's one-sided CONFIDENCE interval exceeds this (from
+:data:`MIN_PAIRS` pairs on): the noise's σ more than 1.4 times the stated, beyond which
+|e| <= 2 h_std would hold less than 80 % of the time (2/√2.4 σ for a ratio of 2.4, where
+the bound passes 2 once the window is full). A source as told practically never: at 20 pairs
+its mean ratio must exceed 3.4 (χ² with 20 degrees of freedom beyond 68, 10⁻⁷), rarer with
+every pair after."""
+
+
+SHOWN_WINDOW = 100.0
+"""Pairs in the window of :class:`ShownNoise` (AltitudeEKF's ``adaptive_window``)."""
+
+SHOWN_MAXIMUM = 100.0
+"""Largest factor :class:`ShownNoise` shows (σ tenfold, AltitudeEKF's ``adaptive_max``):
+its gate is widened by no more, so that a sensor gone to noise far beyond its description
+is not let in at the weight the filter gives it, and is judged by the fault layer."""
+
+
+class ShownNoise(NoiseCheck):
+    """The noise a paper filter's source shows against the variance S its filter computes:
+    the fault layer's check of a filter that keeps its stated R (the paper's equations stay
+    as they are, ``fault_detection=false`` runs them unchecked).
+
+    The ratio m is NoiseCheck's (Mehra's differences of successive innovations, the same
+    window), taken against S as the filter computes it, each pair clipped at CLIP·f as
+    NoiseCheck's at CLIP against f·S (f the factor shown: m of a noise 25 times the stated
+    settles at half of it while f is 1, is shown, and rises to the ratio). While the noise is shown too small (:data:`SHOWN`)
+    :attr:`factor` is m, at most :data:`SHOWN_MAXIMUM`: the gate judges
+    the source's samples against f·S (so that a source stated 5x too precise is gated by
+    its own noise, not rejected and isolated for it), the estimator's published ``h_std``
+    takes the largest factor of its sources (:meth:`~altfusion.estimators.gating.Gating.
+    gate`), and the source's ``NOISE_INFLATED`` bit is set; else the factor is 1 and
+    everything is as the filter computes it: a filter told its noise is bit for bit the
+    one without the check. Deviations from NoiseCheck: nothing is inflated inside the
+    filter, the source is never spared as ``noisy``, and the factor is the shown ratio
+    itself, not a bound on it."""
+
+    __slots__ = ()
+
+    def __init__(self, source: AidSource, window: float = SHOWN_WINDOW) -> None:
+        super().__init__(source, window, SHOWN_MAXIMUM, flagged=SHOWN)
+
+    def gated(self, innovation: float, variance: float, noise: float = 0.0) -> None:
+        """A sample of innovation y and variance S (the filter's) was gated: update m and,
+        while the noise is shown too small, the factor and the source's bit."""
+        # clipped as the stated pairs are against f·S (here S has no factor)
+        pair = self._pair(innovation, variance, CLIP * self.factor, noise)
+        if pair is None:
+            return
+        self.ratio += (pair - self.ratio) / min(self.pairs, self.window)
+        shown = (self.ratio > self.flagged and self.pairs >= MIN_PAIRS
+                 and self.ratio * lower_bound_factor(self._dof()) > self.flagged)
+        self.factor = min(self.ratio, self.maximum) if shown else 1.0
+        self.source.mark_inflated(shown)

@@ -211,6 +211,7 @@ class XuSHAEKF(Estimator):
 
     Params = XuParams
     streams = (ACC, LASER, BARO, GPS)
+    checks_own_noise = True                      # its nominal R checked in eqs. (23)-(24)
     required_sources = {"acc": "its process model is driven by the accelerometer (xu2016 eqs. "
                                "10-11, 19: acc_z is the input u)"}
 
