@@ -363,9 +363,11 @@ class ShownNoise(NoiseCheck):
         pair = self._pair(innovation, variance, CLIP * self.factor, noise)
         if pair is None:
             return
-        self.ratio += (pair - self.ratio) / min(self.pairs, self.window)
-        bound = self.ratio * lower_bound_factor(self._dof()) \
-            if self.ratio > self.flagged and self.pairs >= MIN_PAIRS else 1.0
-        shown = bound > self.flagged
-        self.factor = min(bound, self.maximum) if shown else 1.0
-        self.source.mark_inflated(shown)
+        ratio = self.ratio = self.ratio + (pair - self.ratio) / min(self.pairs, self.window)
+        if ratio > self.flagged and self.pairs >= MIN_PAIRS and \
+                (bound := ratio * lower_bound_factor(self._dof())) > self.flagged:
+            self.factor = min(bound, self.maximum)
+            self.source.mark_inflated(True)
+        elif self.factor != 1.0:                # no longer shown (else nothing to undo)
+            self.factor = 1.0
+            self.source.mark_inflated(False)
