@@ -16,6 +16,7 @@ from altfusion.estimators.hajiyev import HajiyevAdaptiveEstimator
 from altfusion.estimators.health import SourceBit, source_bit
 from altfusion.estimators.noise_check import NoiseCheck, ShownNoise
 from altfusion.estimators.whang import WhangGAEstimator
+from altfusion.estimators.xu import XuSHAEKF
 
 sys.path.insert(0, str(Path(__file__).parent))
 from stream_feeder import StreamFeeder  # noqa: E402
@@ -384,3 +385,19 @@ def test_a_paper_estimator_told_five_times_too_small_a_noise_stays_honest_and_sa
         paper.append(np.abs(rows[:, 0]) <= 2.0 * rows[:, 1])
     assert np.mean(honest) >= 0.80
     assert np.mean(paper) < 0.5
+
+
+@pytest.mark.parametrize("cls, own, plain", [
+    (AltitudeEKF, {"adaptive_noise": True}, {"adaptive_noise": False}),
+    (XuSHAEKF, {"adaptive": True}, {"adaptive": False}),
+])
+def test_an_estimator_without_its_own_check_gets_the_fault_layers(cls, own, plain):
+    """AltitudeEKF and XuSHAEKF check their noises themselves only with their adaptation on;
+    without it (and with ``fault_detection``) their sources get the fault layer's check as
+    the paper filters' do, and without ``fault_detection`` nothing is checked."""
+    def checked(**params) -> set[str]:
+        estimator = cls(cls.Params(**params))
+        return {source.name for source in estimator.aid_sources if source.shown is not None}
+    assert not checked(**own)
+    assert checked(**plain) == set(cls.sources()) - {"acc"}
+    assert not checked(**plain, fault_detection=False)

@@ -98,7 +98,7 @@ from altfusion.estimators.kalman import (
     shift_state,
     update_scalar,
 )
-from altfusion.estimators.noise_check import NoiseCheck
+from altfusion.estimators.noise_check import WINDOW, NoiseCheck
 from altfusion.estimators.process_noise import MotionNoise, maximum_scale
 from altfusion.estimators.range_aid import RangeAid
 from altfusion.estimators.streams import ACC, BARO_ALL, GPS_ALL, LASER, RADAR
@@ -203,7 +203,7 @@ class AltitudeEKFParams(HealthParams):
     adaptive_noise: bool = param(True, None, "Check each source's noise against the scatter "
                                              "of its innovations and inflate its R while "
                                              "found too small (xu2016's bounded adaptation)")
-    adaptive_window: float = param(100.0, "1", "Pairs of successive innovations in the "
+    adaptive_window: float = param(WINDOW, "1", "Pairs of successive innovations in the "
                                                "exponential window of the noise check",
                                    min=1.0)
     adaptive_max: float = param(100.0, "1", "Largest factor of the noise check on a "
@@ -245,7 +245,6 @@ class AltitudeEKF(Estimator):
 
     Params = AltitudeEKFParams
     streams = (BARO_ALL, GPS_ALL, RADAR, LASER, ACC)
-    checks_own_noise = True                      # its noise checks inflate R (adaptive_noise)
 
     def configure(self, clock) -> None:
         p = self.params
@@ -356,6 +355,10 @@ class AltitudeEKF(Estimator):
         for j in range(N):                                # exact symmetry
             P[j][H], P[j][V] = P[H][j], P[V][j]
         self.x, self.P = x, P
+
+    def checks_own_noise(self) -> bool:
+        """Its noise checks inflate R (``adaptive_noise``)."""
+        return self.params.adaptive_noise
 
     def accelerometer_noise(self) -> float:
         """``acc_noise`` (or the typical one): checked, and inflated while found bad, with

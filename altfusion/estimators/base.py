@@ -86,12 +86,6 @@ class Estimator(SampleIntake, Gating, Component):
     """Sources the algorithm cannot do without -> why (xu2016's accelerometer, its model's
     input): ``h_valid`` is false while one has delivered nothing for ``aiding_timeout``."""
 
-    checks_own_noise: ClassVar[bool] = False
-    """The estimator checks its sources' stated noise itself (AltitudeEKF, XuSHAEKF:
-    :class:`~altfusion.estimators.noise_check.NoiseCheck`); else, with ``fault_detection``,
-    the fault layer checks them against the filter's innovations
-    (:class:`~altfusion.estimators.noise_check.ShownNoise`)."""
-
     stated_aliases: ClassVar[dict[str, str]] = {}
     """A sensor error model's stated name (``baro_bias_psd``... of
     :mod:`altfusion.systems.error_models`) -> this estimator's parameter of the same quantity
@@ -110,7 +104,6 @@ class Estimator(SampleIntake, Gating, Component):
         self.declare_inputs()
         self.h_est = 0.0
         self.vz_est = 0.0
-        self.std_factor = 1.0
         self.h_std = 0.0
         super().__init__(params, **kwargs)
 
@@ -159,7 +152,7 @@ class Estimator(SampleIntake, Gating, Component):
         """The factor on the filter's variance of ``h`` in the published ``h_std``: the
         largest the sources' innovations show their stated noise too small by (fault layer,
         :class:`~altfusion.estimators.noise_check.ShownNoise`; 1: as the filter computes)."""
-        if self.params.fault_detection and not self.checks_own_noise:
+        if self.params.fault_detection and not self.checks_own_noise():
             for source in self.aid_sources:
                 if source.name in NOISE_CHECKED:
                     source.shown = ShownNoise(source)
@@ -189,6 +182,14 @@ class Estimator(SampleIntake, Gating, Component):
         """Move the height estimate by ``innovation`` onto a sample of ``source`` whose
         variance is ``variance`` (PX4's height reset): the height's variance becomes the
         sample's, its correlations with the other states zero."""
+
+    def checks_own_noise(self) -> bool:
+        """The estimator checks its sources' stated noise itself, with these parameters
+        (AltitudeEKF's ``adaptive_noise``, XuSHAEKF's adaptive filter:
+        :class:`~altfusion.estimators.noise_check.NoiseCheck`); else (the default), with
+        ``fault_detection``, the fault layer checks them against the filter's innovations
+        (:class:`~altfusion.estimators.noise_check.ShownNoise`)."""
+        return False
 
     def accelerometer_noise(self) -> float | None:
         """The accelerometer's stated noise, 1σ per sample (m/s²), for an estimator that

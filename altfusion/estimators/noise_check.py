@@ -153,6 +153,10 @@ UNSTATED_START = 100.0
 FALL = 4.0
 """The factor of a noise not stated falls by at most this ratio per pair."""
 
+WINDOW = 100.0
+"""Pairs in a check's window (AltitudeEKF's default ``adaptive_window``, XuSHAEKF's checks,
+:class:`ShownNoise`)."""
+
 CONFIDENCE = 0.975
 """One-sided confidence that the true variance of a noise not stated is below the one in use
 (the two-standard-error bound of a normal estimate)."""
@@ -285,8 +289,13 @@ class NoiseCheck:
         (the statement stands)."""
         if not self.beyond_flag:            # nor is the bound, at most f
             return 1.0
-        bound = min(self.ratio * lower_bound_factor(self._dof()), self.factor)
+        bound = min(self._confident_ratio(), self.factor)
         return bound if bound > self.flagged else 1.0
+
+    def _confident_ratio(self) -> float:
+        """m·k/χ²_k(CONFIDENCE): the lower bound of the true ratio's one-sided CONFIDENCE
+        interval."""
+        return self.ratio * lower_bound_factor(self._dof())
 
     def _pair(self, innovation: float, variance: float, clip: float, noise: float,
               ) -> float | None:
@@ -319,9 +328,6 @@ its mean ratio must exceed 3.4 (χ² with 20 degrees of freedom beyond 68, 10⁻
 every pair after."""
 
 
-SHOWN_WINDOW = 100.0
-"""Pairs in the window of :class:`ShownNoise` (AltitudeEKF's ``adaptive_window``)."""
-
 SHOWN_MAXIMUM = 100.0
 """Largest factor :class:`ShownNoise` shows (σ tenfold, AltitudeEKF's ``adaptive_max``):
 its gate is widened by no more, so that a sensor gone to noise far beyond its description
@@ -353,19 +359,20 @@ class ShownNoise(NoiseCheck):
 
     __slots__ = ()
 
-    def __init__(self, source: AidSource, window: float = SHOWN_WINDOW) -> None:
+    def __init__(self, source: AidSource, window: float = WINDOW) -> None:
         super().__init__(source, window, SHOWN_MAXIMUM, flagged=SHOWN)
 
     def gated(self, innovation: float, variance: float, noise: float = 0.0) -> None:
         """A sample of innovation y and variance S (the filter's) was gated: update m and,
-        while the noise is shown too small, the factor and the source's bit."""
+        while the noise is shown too small, the factor and the source's bit (``noise``:
+        NoiseCheck's, unused here)."""
         # clipped as the stated pairs are against f·S (here S has no factor)
         pair = self._pair(innovation, variance, CLIP * self.factor, noise)
         if pair is None:
             return
         ratio = self.ratio = self.ratio + (pair - self.ratio) / min(self.pairs, self.window)
         if ratio > self.flagged and self.pairs >= MIN_PAIRS and \
-                (bound := ratio * lower_bound_factor(self._dof())) > self.flagged:
+                (bound := self._confident_ratio()) > self.flagged:
             self.factor = min(bound, self.maximum)
             self.source.mark_inflated(True)
         elif self.factor != 1.0:                # no longer shown (else nothing to undo)

@@ -81,7 +81,7 @@ from altfusion.estimators.kalman import (
     shift_state,
     update,
 )
-from altfusion.estimators.noise_check import NoiseCheck
+from altfusion.estimators.noise_check import WINDOW, NoiseCheck
 from altfusion.estimators.streams import ACC, BARO, GPS, LASER, Stream
 from altfusion.params import param
 
@@ -105,9 +105,6 @@ MAX_FADING = 1000.0
 MAX_ACC_BIAS_VARIANCE = 1.0
 """Largest variance of the accelerometer bias b_a after strong tracking, m²/s⁴ (PX4 EKF2's
 bound on its accelerometer bias variance): see :meth:`XuSHAEKF._strong_tracking`."""
-CHECK_WINDOW = 100.0
-"""Pairs of successive innovations in the window of each sensor's noise check (the fault
-layer's: :meth:`XuSHAEKF._nominal`)."""
 CHECK_MAXIMUM = 1e4
 """Largest factor of a noise check on a nominal R (σ a hundredfold: a 0.5 m baro stated for
 a 20-50 m one)."""
@@ -211,7 +208,6 @@ class XuSHAEKF(Estimator):
 
     Params = XuParams
     streams = (ACC, LASER, BARO, GPS)
-    checks_own_noise = True                      # its nominal R checked in eqs. (23)-(24)
     required_sources = {"acc": "its process model is driven by the accelerometer (xu2016 eqs. "
                                "10-11, 19: acc_z is the input u)"}
 
@@ -237,7 +233,7 @@ class XuSHAEKF(Estimator):
             "baro": Channel(p.R_baro, p.b_baro, deque(maxlen=p.innovation_window)),
             "laser": Channel(p.R_laser, p.b_laser, deque(maxlen=p.innovation_window)),
         }
-        self.noise_checks = {name: NoiseCheck(self.aid[name], CHECK_WINDOW, CHECK_MAXIMUM,
+        self.noise_checks = {name: NoiseCheck(self.aid[name], WINDOW, CHECK_MAXIMUM,
                                               flagged=CHECK_FLAGGED)
                              for name in ("baro", "laser")} \
             if p.fault_detection and p.adaptive else {}
@@ -387,6 +383,11 @@ class XuSHAEKF(Estimator):
         self.P[0, 0] = R + offset**2 * self.P[b, b]
         self.P[0, b] = self.P[b, 0] = -offset * self.P[b, b]
         self.started = True
+
+    def checks_own_noise(self) -> bool:
+        """The adaptive filter checks its baro's and laser's nominal R (:meth:`_nominal`);
+        the plain one is checked by the fault layer as the other paper filters are."""
+        return self.params.adaptive
 
     def reset_height(self, source: str, innovation: float, variance: float) -> None:
         shift_state(self.x, self.P, 0, innovation, variance)
