@@ -200,17 +200,19 @@ def test_each_told_mode_puts_what_it_tells_in_the_scenarios_specs(fmus):
         assert told(mode, "hajiyev", "HajiyevAdaptiveEstimator") == pytest.approx(expected)
         assert told(mode, "hajiyev", "estimator") == paper
         assert "estimator.h_est" not in scenario.spec.record
-    # The fault flight: noise tells its sensors' noises only, models also the flight's error
-    # models (what the fault suite tells); BaoDriftEstimator is told noises only there.
+    # The fault flight: noise tells its sensors' noises and its terrain (the site, told in
+    # every mode), models also the flight's error models (what the fault suite tells);
+    # BaoDriftEstimator is told noises only there.
     noise = told("noise", "nominal_flight", "AltitudeEKF")
     assert set(noise) == {"baro_noise", "gps_noise", "gps_vz_noise", "acc_noise",
-                          "radar_noise", "laser_noise", "gps_vdop_ref"}
-    assert told("models", "nominal_flight", "AltitudeEKF") == {**noise, **FLAT_TERRAIN,
-                                                               "height_ref": "range"}
+                          "radar_noise", "laser_noise", "gps_vdop_ref", *FLAT_TERRAIN}
+    assert {k: noise[k] for k in FLAT_TERRAIN} == FLAT_TERRAIN
+    assert told("models", "nominal_flight", "AltitudeEKF") == {**noise, "height_ref": "range"}
     assert told("models", "nominal_flight", "BaoDriftEstimator") == \
         told("noise", "nominal_flight", "BaoDriftEstimator")
-    for component in ("AltitudeEKF", "BaoDriftEstimator"):
-        assert told("nothing", "nominal_flight", component) == {}
+    assert told("nothing", "nominal_flight", "AltitudeEKF") == FLAT_TERRAIN
+    assert told("nothing", "nominal_flight", "BaoDriftEstimator") == {}
+    assert told("misstated_x5", "nominal_flight", "AltitudeEKF")["terrain_psd"] == 0.0
     bao = told("noise", "nominal_flight", "BaoDriftEstimator")
     assert told("misstated_x0.2", "nominal_flight", "BaoDriftEstimator") == pytest.approx(
         {"R_baro": 0.04 * bao["R_baro"], "R_gps": 0.04 * bao["R_gps"],

@@ -11,6 +11,8 @@ import pytest
 from altfusion.estimators.altitude_ekf import AltitudeEKF
 from altfusion.estimators.baseline import BaselineKF
 from altfusion.estimators.health import Status
+from altfusion.estimators.xu import XuSHAEKF
+from altfusion.estimators.yang import YangFusionKF
 from altfusion.evaluation.metrics import Series, run_metrics
 from altfusion.evaluation.report import format_markdown, primary, side_by_side, summary_json
 from altfusion.evaluation.robustness import Robustness, cell_robustness
@@ -22,8 +24,16 @@ from altfusion.evaluation.scenarios import (
     error_parameters,
     noise_parameters,
 )
-from altfusion.evaluation.told import DEFAULT_TOLD, Told, misstate, told_variants
-from altfusion.systems.error_models import SENSOR_ERRORS
+from altfusion.evaluation.told import (
+    DEFAULT_TOLD,
+    SITE_NAMES,
+    Told,
+    misstate,
+    split_noise,
+    split_site,
+    told_variants,
+)
+from altfusion.systems.error_models import FLAT_TERRAIN, SENSOR_ERRORS
 from altfusion.systems.faults import TRUE_NOISE
 from altfusion.systems.spec import SystemSpec
 
@@ -85,6 +95,47 @@ def test_misstated_in_the_fault_flight_keeps_its_settings_beyond_the_noise():
         assert ekf[kept] == TRUE_NOISE["AltitudeEKF"][kept]
     hajiyev = misstate(TRUE_NOISE["HajiyevAdaptiveEstimator"], 0.2)
     assert hajiyev["drift_psd"] == TRUE_NOISE["HajiyevAdaptiveEstimator"]["drift_psd"]
+
+
+def told_in(scenario: str, core, told: Told, noise: dict) -> dict:
+    """What ``told`` tells the estimator in paper scenario ``scenario``."""
+    info = estimator(core)
+    return told.tell(noise_parameters(info, noise),
+                     error_parameters(info, SENSOR_ERRORS[scenario]))
+
+
+@pytest.mark.parametrize("mode", ["noise", "nothing", "misstated"])
+def test_every_mode_tells_the_terrain_and_no_sensor_error_model(mode):
+    """The site (the flat terrain at 0 m the paper systems with a rangefinder fly over) is
+    told in every mode; the sensor error models only in models."""
+    flat = {k: SENSOR_ERRORS["yang2020"][k] for k in SITE_NAMES}
+    told = told_in("yang2020", AltitudeEKF, Told(mode, 0.2 if mode == "misstated" else 1.0),
+                   {"baro_noise": 20.0})
+    assert {k: told[k] for k in SITE_NAMES} == flat == {"terrain_h": 0.0, "P0_terrain": 1e-8,
+                                                         "terrain_psd": 0.0}
+    assert set(told) - set(SITE_NAMES) <= {"baro_noise"}
+    assert "P0_offset" not in told and "baro_bias_psd" not in told
+
+
+@pytest.mark.parametrize("core", [YangFusionKF, XuSHAEKF])
+def test_the_paper_estimators_with_a_rangefinder_assume_the_told_terrain_by_default(core):
+    """Telling the site changes nothing for the paper estimators: their terrain is the flat
+    ground at 0 m whatever they are told, so AltitudeEKF told it compares on the same
+    knowledge."""
+    for scenario in ("yang2020", "xu2016_hover15"):
+        site = {k: v for k, v in told_in(scenario, core, Told("nothing"), {}).items()}
+        assert site == {"terrain_h": 0.0}
+        assert core.Params().terrain_h == site["terrain_h"]
+
+
+def test_the_fault_flights_terrain_is_told_in_every_mode_its_range_reference_in_models():
+    noise, models = split_noise(TRUE_NOISE["AltitudeEKF"])
+    site, errors = split_site(models)
+    assert site == FLAT_TERRAIN and errors == {"height_ref": "range"}
+    for told in (Told("noise"), Told("nothing"), Told("misstated", 5.0)):
+        assert {k: v for k, v in told.tell(noise, models).items() if k in SITE_NAMES} == site
+        assert "height_ref" not in told.tell(noise, models)
+    assert Told("models").tell(noise, models)["height_ref"] == "range"
 
 
 def test_the_paper_estimator_is_observed_told_per_the_mode_only_in_nothing_and_misstated():

@@ -20,7 +20,7 @@ run all applicable estimators read the same sensor outputs side by side. What th
 is the evaluation's `--told` mode, each mode one evaluation of every scenario:
 
 * `models` (the default): each its sensors' true noise and, in a paper scenario, the sensor
-  error models the paper system states (a calibrated barometer, its drift, flat terrain, an
+  error models the paper system states (a calibrated barometer, its drift, an
   accelerometer's turn-on bias; listed with each scenario below), through every parameter it
   has of those names or of the same quantity under its own name (BaselineKF's `bias_psd` is
   a `baro_bias_psd`);
@@ -31,10 +31,17 @@ is the evaluation's `--told` mode, each mode one evaluation of every scenario:
 * `misstated`: what `noise` tells with every noise misstated x0.2 and, separately, x5 (a
   noise told as a variance x0.04 and x25).
 
-Everything else runs on each estimator's defaults. In the fault flight `models` tells what
-the fault suite tells: the sensors' noises and the flight's error models (its flat terrain at
-0 m, AltitudeEKF's range height reference, the baro walk and YangFusionKF's GNSS-offset walk);
-`noise` and `misstated` tell the noises only, as in the paper scenarios. The
+Every mode also tells the site: the terrain under the flight (flat ground at 0 m wherever
+a rangefinder flies), the world the rangefinders measure rather than an error of a sensor.
+The paper estimators that read a rangefinder have it in their equations (YangFusionKF's and
+XuSHAEKF's `terrain_h` 0, whatever they are told); AltitudeEKF, which estimates the terrain,
+is told it (`terrain_h`, `P0_terrain`, `terrain_psd`) so that they compare on the same
+knowledge ([the evaluation method](montecarlo.md#evaluation-every-estimator-in-every-scenario)
+says what it changes). Everything else runs on each estimator's defaults. In the fault
+flight `models` tells what the fault suite tells: the sensors' noises and the flight's error
+models (AltitudeEKF's range height reference, the baro walk and YangFusionKF's GNSS-offset
+walk) besides its terrain; `noise` and `misstated` tell the noises and the terrain, as in
+the paper scenarios. The
 paper's own estimator keeps its paper's parameters (and, in yang2020 and xu2016, flies the
 aircraft): in `models` and `noise` its cell is that paper-configured estimator, the
 reference an estimator told only the noise has to beat. In `nothing` and `misstated` every

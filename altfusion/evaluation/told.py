@@ -13,10 +13,19 @@ be wrong. Each mode is one evaluation of every scenario, in its own campaigns:
 * ``misstated``: what ``noise`` tells with every noise misstated, once x0.2 and once x5
   (:data:`MISSTATED_FACTORS`: two variants; a noise told as a variance x0.04 and x25).
 
+Every mode also tells the *site* (:data:`SITE_NAMES`, :func:`split_site`): the terrain under
+the flight, which is the world the rangefinders measure, not an error of a sensor. The paper
+estimators that read a rangefinder have it in their equations (YangFusionKF's and XuSHAEKF's
+``terrain_h``: flat ground at 0 m, whatever they are told); told it, an estimator with a
+terrain state (AltitudeEKF) compares with them on the same knowledge, and a user flying over
+known ground knows it. Told nothing about the terrain, no estimator can place a
+rangefinder's height above sea level better than its GNSS averages (docs/montecarlo.md
+gives the numbers).
+
 In the fault flight the fault suite's settings (:data:`altfusion.systems.faults.TRUE_NOISE`)
-are split the same way (:func:`split_noise`): ``noise`` tells their noises, ``models`` also
-the rest (the flat terrain, AltitudeEKF's range height reference, the flight's baro and GNSS
-walks), which is what the fault suite tells.
+are split the same way (:func:`split_noise`): ``noise`` tells their noises and the site (its
+flat terrain), ``models`` also the rest (AltitudeEKF's range height reference, the flight's
+baro and GNSS walks), which is what the fault suite tells.
 
 The paper's own estimator (the system's component ``estimator``) keeps its paper's
 parameters, and in ``models`` and ``noise`` its cell is that component: the reference an
@@ -37,11 +46,12 @@ TOLD_MODES = (NOISE, MODELS, NOTHING, MISSTATED)
 """The ``--told`` modes, in the order the report shows them."""
 
 TOLD = {
-    NOISE: "each estimator told its sensors' true noise only",
-    MODELS: "each estimator told its sensors' true noise and, in a paper scenario, the sensor "
-            "error models the paper system states",
-    NOTHING: "each estimator told nothing (its defaults)",
-    MISSTATED: "each estimator told its sensors' noise only, every noise misstated",
+    NOISE: "each estimator told its sensors' true noise and the terrain only",
+    MODELS: "each estimator told its sensors' true noise, the terrain and, in a paper "
+            "scenario, the sensor error models the paper system states",
+    NOTHING: "each estimator told nothing but the terrain (its defaults otherwise)",
+    MISSTATED: "each estimator told its sensors' noise and the terrain only, every noise "
+               "misstated",
 }
 """What each mode tells, as the report says it."""
 
@@ -63,6 +73,12 @@ or ``<source>_noise_std``: BaoDriftEstimator's GNSS user range error, from which
 its GPS noise (told in the fault flight)."""
 
 
+SITE_NAMES = ("terrain_h", "P0_terrain", "terrain_psd")
+"""The parameters that describe the site, not a sensor: the terrain under the flight (its
+height, the variance it is known with, how it varies along the flight). Told in every mode
+(module documentation)."""
+
+
 def noise_power(name: str) -> int:
     """How the parameter ``name`` states a sensor noise: 1 as its σ, 2 as its variance
     (``R_<...>``: ``R_baro``, BaoDriftEstimator's ``R_worst``), 0 not a noise (an error
@@ -81,6 +97,13 @@ def split_noise(parameters: dict[str, Any]) -> tuple[dict[str, Any], dict[str, A
     noise = {name: value for name, value in parameters.items()
              if noise_power(name) or name in NOISE_REFERENCES}
     return noise, {name: value for name, value in parameters.items() if name not in noise}
+
+
+def split_site(models: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
+    """``models`` split into those describing the site (:data:`SITE_NAMES`: the terrain) and
+    the sensor error models."""
+    site = {name: value for name, value in models.items() if name in SITE_NAMES}
+    return site, {name: value for name, value in models.items() if name not in site}
 
 
 def misstate(parameters: dict[str, Any], factor: float) -> dict[str, Any]:
@@ -123,15 +146,16 @@ class Told:
 
     def tell(self, noise: dict[str, Any], models: dict[str, Any]) -> dict[str, Any]:
         """The parameters an evaluated estimator gets: of those telling its sensors' noise
-        (``noise``) and those telling their stated error models (``models``), what this
-        mode tells."""
+        (``noise``) and those telling the site and the stated error models (``models``),
+        what this mode tells: the site always (:func:`split_site`)."""
         if self.mode == MODELS:
             return {**noise, **models}
+        site, _ = split_site(models)
         if self.mode == NOISE:
-            return dict(noise)
+            return {**noise, **site}
         if self.mode == MISSTATED:
-            return misstate(noise, self.factor)
-        return {}
+            return {**misstate(noise, self.factor), **site}
+        return site
 
 
 DEFAULT_TOLD = Told()

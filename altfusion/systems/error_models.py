@@ -23,7 +23,9 @@ The names (AltitudeEKF's; XuSHAEKF and YangFusionKF share ``baro_bias_psd``,
   ``drift_variance_rate``, or the weather's drift of the barometric reference);
 * ``P0_scale``, ``baro_scale_psd``: the baro error proportional to the height change (0 where
   the true atmosphere is the calibration's);
-* ``terrain_h``, ``P0_terrain``, ``terrain_psd``: flat terrain at a known height;
+* ``terrain_h``, ``P0_terrain``, ``terrain_psd``: flat terrain at a known height (the
+  site rather than a sensor's error: ``altfusion evaluate`` tells it in every ``--told``
+  mode, :func:`altfusion.evaluation.told.split_site`);
 * ``P0_acc_bias``, ``acc_bias_psd``: the accelerometer's turn-on bias (1σ squared) and its
   drift.
 """
