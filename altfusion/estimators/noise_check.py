@@ -359,8 +359,9 @@ class ShownNoise(NoiseCheck):
 
     __slots__ = ()
 
-    def __init__(self, source: AidSource, window: float = WINDOW) -> None:
-        super().__init__(source, window, SHOWN_MAXIMUM, flagged=SHOWN)
+    def __init__(self, source: AidSource, window: float = WINDOW,
+                 maximum: float = SHOWN_MAXIMUM) -> None:
+        super().__init__(source, window, maximum, flagged=SHOWN)
 
     def gated(self, innovation: float, variance: float, noise: float = 0.0) -> None:
         """A sample of innovation y and variance S (the filter's) was gated: update m and,
