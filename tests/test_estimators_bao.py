@@ -206,8 +206,7 @@ def test_a_baro_noisier_than_told_shows_in_its_scatter_and_h_std_takes_it():
     baro on the differences of successive samples: |e| <= 2 h_std at least 85 % of the time
     over seeds 1-4 together (the fault suite's 85 %; measured 0.93, per seed 0.93-0.94, at an
     RMS of 2.0 m under a median h_std of 1.86 m; the paper's code path 0.31, asserted below
-    0.5 so that the test fails if the check stops showing),
-    the baro flagged."""
+    0.5 so that the test fails if the check stops showing), the baro flagged."""
     honest, paper = [], []
     for seed in range(1, 5):
         rows = baro_scatter_hover(0.01, seed)

@@ -123,7 +123,7 @@ def test_the_paper_estimators_with_a_rangefinder_assume_the_told_terrain_by_defa
     ground at 0 m whatever they are told, so AltitudeEKF told it compares on the same
     knowledge."""
     for scenario in ("yang2020", "xu2016_hover15"):
-        site = {k: v for k, v in told_in(scenario, core, Told("nothing"), {}).items()}
+        site = told_in(scenario, core, Told("nothing"), {})
         assert site == {"terrain_h": 0.0}
         assert core.Params().terrain_h == site["terrain_h"]
 

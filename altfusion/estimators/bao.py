@@ -65,9 +65,8 @@ Deviations from the paper:
   allows, which hides the noise): while the shown factor f exceeds 1, ``h_std`` takes
   f·R_baro, the jump gate min(f, 100)·R_baro (every shown noise's bound on a gate,
   :data:`~altfusion.estimators.noise_check.SHOWN_MAXIMUM`), and the baro's
-  ``NOISE_INFLATED`` bit is set. The drift filter's R stays the paper's: the baro's noise
-  added to it slowed the drift's tracking of hajiyev_drift's 1 m/s weather drift (told
-  nothing, 12.6 -> 38.6 m RMS in two runs).
+  ``NOISE_INFLATED`` bit is set. The drift filter's R stays the paper's (docs/estimators.md
+  says why).
 
 Scenarios of the paper (for the systems that will reproduce them):
 
@@ -174,6 +173,7 @@ class BaoDriftEstimator(Estimator):
     Params = BaoParams
     streams = (BARO_P, GPS_QUALITY)
     extra_inputs = ("wind_speed",)
+    scatter_checked = ("baro",)                 # its height is the sample: _scatter_check
 
     def initialize_filter(self) -> None:
         p = self.params
@@ -270,12 +270,10 @@ class BaoDriftEstimator(Estimator):
     def _scatter_check(self) -> ShownNoise | None:
         """The baro's noise check (module documentation, deviations), with
         ``fault_detection``: fed the differences of successive baro samples, not the jump
-        gate's innovations (the source's gated check is dropped)."""
+        gate's innovations (:attr:`scatter_checked`)."""
         if not self.params.fault_detection:
             return None
-        baro = self.aid["baro"]
-        baro.shown = None
-        return ShownNoise(baro, maximum=SCATTER_MAXIMUM)
+        return ShownNoise(self.aid["baro"], maximum=SCATTER_MAXIMUM)
 
     def _check_baro_noise(self, h_baro: float) -> float:
         """The factor the baro's scatter shows on ``R_baro`` (1 without the check or while

@@ -41,7 +41,6 @@ from altfusion.estimators.aid_source import AidSource, Verdict
 from altfusion.estimators.gating import Gating
 from altfusion.estimators.health import (
     HEIGHT_SOURCES,
-    NOISE_CHECKED,
     STEP_BITS,
     SourceBit,
     Status,
@@ -50,7 +49,6 @@ from altfusion.estimators.health import (
 )
 from altfusion.estimators.health_params import HealthParams
 from altfusion.estimators.intake import SampleIntake
-from altfusion.estimators.noise_check import ShownNoise
 from altfusion.estimators.streams import Stream, stream_inputs, stream_sources
 
 __all__ = ["HEIGHT_SOURCES", "MAX_DELAY", "AidSource", "Estimator", "HealthParams",
@@ -85,6 +83,10 @@ class Estimator(SampleIntake, Gating, Component):
     required_sources: ClassVar[dict[str, str]] = {}
     """Sources the algorithm cannot do without -> why (xu2016's accelerometer, its model's
     input): ``h_valid`` is false while one has delivered nothing for ``aiding_timeout``."""
+
+    scatter_checked: ClassVar[tuple[str, ...]] = ()
+    """Sources the estimator checks on their samples' scatter itself, not the fault layer on
+    their innovations (:meth:`~altfusion.estimators.gating.Gating.attach_shown_noise`)."""
 
     stated_aliases: ClassVar[dict[str, str]] = {}
     """A sensor error model's stated name (``baro_bias_psd``... of
@@ -149,13 +151,9 @@ class Estimator(SampleIntake, Gating, Component):
         self.aid = {source.name: source for source in self.aid_sources}
         """The aid sources by name."""
         self.std_factor = 1.0
-        """The factor on the filter's variance of ``h`` in the published ``h_std``: the
-        largest the sources' innovations show their stated noise too small by (fault layer,
-        :class:`~altfusion.estimators.noise_check.ShownNoise`; 1: as the filter computes)."""
-        if self.params.fault_detection and not self.checks_own_noise():
-            for source in self.aid_sources:
-                if source.name in NOISE_CHECKED:
-                    source.shown = ShownNoise(source)
+        """The factor on the filter's variance of ``h`` in the published ``h_std``: the largest
+        shown by the sources' :attr:`AidSource.shown` (1: as the filter computes)."""
+        self.attach_shown_noise()
         self._heights = tuple(source for source in self.aid_sources if source.height)
         self._last_aiding = -math.inf
         self._started_at = math.inf

@@ -10,7 +10,8 @@ import math
 
 from altfusion.estimators import fault_detection as faults
 from altfusion.estimators.aid_source import FUSED, AidSource, Verdict
-from altfusion.estimators.health import STEP_BITS
+from altfusion.estimators.health import NOISE_CHECKED, STEP_BITS
+from altfusion.estimators.noise_check import ShownNoise
 
 
 class Gating:
@@ -58,6 +59,17 @@ class Gating:
             if verdict is not None:
                 return verdict
         return self._reject(source, innovation, ratio, biased)
+
+    def attach_shown_noise(self) -> None:
+        """With ``fault_detection``, unless the estimator checks its noises itself
+        (:meth:`~altfusion.estimators.base.Estimator.checks_own_noise`), the fault layer's
+        check of each :data:`~altfusion.estimators.health.NOISE_CHECKED` source on its
+        innovations (:attr:`AidSource.shown`), but for the estimator's
+        :attr:`~altfusion.estimators.base.Estimator.scatter_checked` sources."""
+        if self.params.fault_detection and not self.checks_own_noise():
+            for source in self.aid_sources:
+                if source.name in NOISE_CHECKED and source.name not in self.scatter_checked:
+                    source.shown = ShownNoise(source)
 
     def _show_noise(self) -> None:
         """:attr:`std_factor` from the noise factors the sources' innovations show."""

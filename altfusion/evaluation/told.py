@@ -35,6 +35,7 @@ observer component of its FMU told per the mode, while the system's ``estimator`
 flies the aircraft on the paper's parameters and is then not evaluated.
 """
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -94,16 +95,20 @@ def split_noise(parameters: dict[str, Any]) -> tuple[dict[str, Any], dict[str, A
     """``parameters`` split into those stating a sensor noise (:func:`noise_power`, with the
     conditions a noise holds at, :data:`NOISE_REFERENCES`) and the others: the error models
     (a terrain, a reference, a bias's walk)."""
-    noise = {name: value for name, value in parameters.items()
-             if noise_power(name) or name in NOISE_REFERENCES}
-    return noise, {name: value for name, value in parameters.items() if name not in noise}
+    return _partition(parameters, lambda name: noise_power(name) or name in NOISE_REFERENCES)
 
 
 def split_site(models: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
     """``models`` split into those describing the site (:data:`SITE_NAMES`: the terrain) and
     the sensor error models."""
-    site = {name: value for name, value in models.items() if name in SITE_NAMES}
-    return site, {name: value for name, value in models.items() if name not in site}
+    return _partition(models, lambda name: name in SITE_NAMES)
+
+
+def _partition(parameters: dict[str, Any], chosen: Callable[[str], Any],
+               ) -> tuple[dict[str, Any], dict[str, Any]]:
+    """``parameters`` split into those whose name is ``chosen`` and the others."""
+    first = {name: value for name, value in parameters.items() if chosen(name)}
+    return first, {name: value for name, value in parameters.items() if name not in first}
 
 
 def misstate(parameters: dict[str, Any], factor: float) -> dict[str, Any]:
