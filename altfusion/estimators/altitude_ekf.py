@@ -88,6 +88,7 @@ from dataclasses import dataclass
 from altfusion.errors import ParameterError
 from altfusion.estimators.aid_source import FUSED
 from altfusion.estimators.base import MAX_DELAY, Estimator, HealthParams, Verdict
+from altfusion.estimators.ground_range import GroundRange
 from altfusion.estimators.health import NOISE_CHECKED, STEP_BITS, UNKNOWN_STD
 from altfusion.estimators.kalman import (
     decorrelate,
@@ -155,10 +156,14 @@ class AltitudeEKFParams(HealthParams):
     acc_bias_psd: float = param(1e-5, "m2/s5", "PSD of the accelerometer-bias random walk "
                                                "(PX4 EKF2_ACC_B_NOISE 0.003 m/s³ squared)",
                                 min=0.0)
-    baro_bias_psd: float = param(0.01, "m2/s", "PSD of the random walk of the baro offset d "
-                                               "(height_ref gps or range)", min=0.0)
-    gps_bias_psd: float = param(0.01, "m2/s", "PSD of the random walk of the GNSS offset g "
-                                              "(height_ref baro or range)", min=0.0)
+    baro_bias_psd: float = param(0.0169, "m2/s", "PSD of the random walk of the baro offset d "
+                                                 "(height_ref gps or range; PX4 EKF2's "
+                                                 "baro_bias_nsd 0.13 m/s/√Hz, squared)",
+                                 min=0.0)
+    gps_bias_psd: float = param(0.0169, "m2/s", "PSD of the random walk of the GNSS offset g "
+                                                "(height_ref baro or range; PX4 EKF2's "
+                                                "gps_hgt_bias_nsd 0.13 m/s/√Hz, squared)",
+                                min=0.0)
     baro_scale_psd: float = param(1e-6, "1/s", "PSD of the random walk of the baro scale "
                                                "factor k (1e-6: about 1 % per 100 s, the "
                                                "temperature and lapse-rate error of an "
@@ -190,6 +195,10 @@ class AltitudeEKFParams(HealthParams):
                                          "constant)")
     laser_max_height: float = param(25.0, "m", "The laser is fused below this range (xu2016: "
                                                "25 m)", positive=True)
+    laser_min_range: float = param(0.1, "m", "The laser's shortest reading (PX4 EKF2_MIN_RNG; "
+                                             "xu2016: 0.1 m): an invalid laser frame while "
+                                             "the vehicle may stand on the ground reads "
+                                             "between 0 and it (0: never)", min=0.0)
     radar_max_height: float = param(5000.0, "m", "The radio altimeter is fused below this "
                                                  "range", positive=True)
     range_hysteresis: float = param(1.0, "m", "A rangefinder switched off above its "
@@ -251,6 +260,9 @@ class AltitudeEKF(Estimator):
         if p.height_ref not in HEIGHT_REFERENCES:
             raise ParameterError("height_ref", p.height_ref,
                                  f"must be one of {', '.join(HEIGHT_REFERENCES)}")
+        if p.laser_min_range >= p.laser_max_height:
+            raise ParameterError("laser_min_range", p.laser_min_range,
+                                 f"must be below laser_max_height ({p.laser_max_height:g} m)")
         stated = {source: getattr(p, f"{source}_noise") for source in TYPICAL_NOISE}
         self.sensor_noise = {source: value or TYPICAL_NOISE[source]
                              for source, value in stated.items()}
@@ -288,6 +300,10 @@ class AltitudeEKF(Estimator):
                                   p.range_aid_max_height, p.range_hysteresis) \
             if p.range_aid else None
         """PX4's conditional range aid (None without ``range_aid``)."""
+        self.ground_range = GroundRange(p.laser_min_range) \
+            if p.laser_min_range > 0.0 and p.gate_sigma > 0.0 else None
+        """PX4's on-ground range (None without ``laser_min_range`` or a gate)."""
+        self._laser_out = False           # an invalid laser frame arrived in this step
         self._reference = p.height_ref if p.height_ref != "range" else None
         self._reference_rejected_since: float | None = None
         self._reference_sample = (0.0, 0.0, 1.0)       # its last rejected (z, stamp, σ)
@@ -417,6 +433,11 @@ class AltitudeEKF(Estimator):
                 self._fuse_height(name, reading, stamp, sigma)
             elif name in self.noise_checks:
                 self.noise_checks[name].forget()
+            if stream is LASER and self.ground_range is not None:
+                self.ground_range.refuted = False
+        if self._laser_out:
+            self._laser_out = False
+            self._ground_reading()
         self._update_range_aid()
         self._ground_constraint()
         self._adapt_motion_noise()
@@ -443,6 +464,34 @@ class AltitudeEKF(Estimator):
             self.note(f"range aid {'started: the terrain held' if aid.active else 'stopped'}")
         if aid.active:
             self._step_flags |= STEP_BITS.RANGE_AID
+
+    def frame_invalid(self, stream) -> None:
+        """An invalid laser frame: perhaps the vehicle on the ground (:meth:`_ground_reading`,
+        in this step's fusion)."""
+        if stream is LASER and self.ground_range is not None:
+            self._laser_out = True
+
+    def _ground_reading(self) -> None:
+        """PX4's on-ground range: this step's invalid laser frame read as the laser between 0
+        and its minimum range above the terrain, fused (as the laser's, ``status`` its FUSED
+        bit) where :mod:`~altfusion.estimators.ground_range` says: the height above the
+        terrain less certain than the reading and not possibly beyond the laser's reach; the
+        reading within the gate and the speed a standing vehicle's, else the ground refuted
+        until the laser's next valid frame; never for an isolated laser."""
+        x, p, laser, ground = self.x, self.params, self.aid["laser"], self.ground_range
+        if not self.started or laser.isolated:
+            return
+        y, above, row, _ = self._innovation("laser", ground.reading(), self.clock.now, 0.0)
+        gate = p.gate_sigma                               # above: Var(h - t)
+        if not ground.tells(above) or x[H] - x[T] + gate * math.sqrt(above) >= p.laser_max_height:
+            return
+        R = ground.noise(above, self._noise_variance("laser", self.sensor_noise["laser"]))
+        if not ground.judge(y * y <= gate * gate * (above + R), x[V],
+                            math.sqrt(self.P[V][V])):
+            return
+        self._terrain_known = True                        # the terrain under the laser read
+        self.x, self.P, _ = update_scalar(x, self.P, row, y, R)
+        self.accept(laser)
 
     def _adapt_motion_noise(self) -> None:
         """Without an accelerometer, the motion model's noise adapted to this step's

@@ -220,6 +220,7 @@ class SampleIntake:
             self.note(f"{prefix}: {count - last - 1} sample(s) arrived between two "
                       f"estimator steps; only the latest is fused", f"{prefix} skipped")
         if stream.valid and not getattr(self, stream.valid):
+            self.frame_invalid(stream)
             return None
         sample = dict(zip(stream.fields, map(float, stream.read(self))))  # noqa: B905 (fast)
         if not all(map(math.isfinite, sample.values())):
@@ -254,6 +255,10 @@ class SampleIntake:
         self._seen.add(prefix)
         last_stamp[prefix] = stamp
         return sample
+
+    def frame_invalid(self, stream: Stream) -> None:
+        """A new frame of ``stream`` arrived flagged invalid (a rangefinder out of its
+        range): no sample; an estimator that reads something into it overrides this."""
 
     def _check_auxiliary(self, sample: dict[str, float], name: str, lowest: float,
                          highest: float) -> None:
