@@ -46,9 +46,9 @@ CHECKSUMS = {
     ("xu2016_hover15", "core"):
         "3702b86a48ea3a2e2c24ad829785f840078574b2a39bf12efc567465c95c8a7c",
     ("fault_flight_baro_step", "fmu"):
-        "954af433989065956a97b5ba7c8e5cbaaf1e503faac4e4fe88950e88179807a7",
+        "02f0930d01f7302d11d109ae7f6aa7350b4778c9c76fc2423e4ac4d8d846717e",
     ("fault_flight_baro_step", "core"):
-        "954af433989065956a97b5ba7c8e5cbaaf1e503faac4e4fe88950e88179807a7",
+        "02f0930d01f7302d11d109ae7f6aa7350b4778c9c76fc2423e4ac4d8d846717e",
 }
 """sha256 of :func:`checksum` per (system, backend), recorded on main 6300b44, except
 fault_flight_baro_step's, re-recorded when AltitudeEKF's h_std before its first height sample

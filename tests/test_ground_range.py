@@ -57,10 +57,10 @@ def test_on_the_ground_the_invalid_frames_pin_the_height():
     """Without the readings the height is the GNSS's average (3 m at 5 Hz: ~0.6 m after 5 s)
     and the baro's, measured RMS 0.5-1.5 m per seed; with them it lies in the laser's
     [0, 0.1 m] about its middle, at most the 0.05 m half-width off plus the few mm the other
-    sources pull (asserted: below 0.1 m), its h_std at the reading's uniform spread
-    0.1/√12 = 0.029 m: a truth at the interval's edge (here 0 m) lies 0.05 m, 1.7 of it, from
-    the middle, within 2 h_std as long as the other sources keep the estimate within 0.008 m
-    of the middle (measured 90-99 % of the steps per seed): asserted, the fault suite's 85 %.
+    sources pull (asserted: below 0.1 m), its h_std at the reading's half-width 0.05 m: a
+    truth anywhere in [0, 0.1 m] within 2 h_std of the estimate while the other sources keep
+    it within 0.05 m of the middle (measured 100 % of the steps per seed): asserted, the
+    fault suite's 85 %.
     Seeds 1-4."""
     for seed in range(1, 5):
         on, off = standing(seed), standing(seed, laser_min_range=0.0)

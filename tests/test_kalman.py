@@ -22,6 +22,8 @@ from altfusion.estimators.kalman import (
     update,
     update_first_of_two,
     update_one_state,
+    update_scalar,
+    update_scalar_of,
     update_state_component,
     white_jerk_noise,
 )
@@ -310,3 +312,24 @@ def test_filter_is_consistent_nis_mean_equals_measurement_dimension():
         x, P = result.x, result.P
         nis.append(result.nis)
     assert np.mean(nis[100:]) == pytest.approx(1.0, abs=0.05)
+
+
+def test_a_consider_update_moves_only_its_states_and_keeps_p_a_covariance():
+    """update_scalar_of: with every state listed it is update_scalar; with some left out
+    their estimates do not move, P stays symmetric and positive definite, and the listed
+    states' variances shrink less than in the full update (the considered errors stay)."""
+    rng = np.random.default_rng(7)
+    A = rng.standard_normal((5, 5))
+    P = (A @ A.T + 0.1 * np.eye(5)).tolist()
+    x = rng.standard_normal(5).tolist()
+    H = ((0, 1.0), (3, -1.0))
+    full_x, full_P, _ = update_scalar(x, P, H, 0.7, 0.2)
+    all_x, all_P = update_scalar_of(x, P, H, 0.7, 0.2, range(5))
+    np.testing.assert_allclose(all_x, full_x, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(all_P, full_P, rtol=1e-12, atol=1e-12)
+    some_x, some_P = update_scalar_of(x, P, H, 0.7, 0.2, (0, 1, 3))
+    assert some_x[2] == x[2] and some_x[4] == x[4]
+    some_P = np.array(some_P)
+    assert (some_P == some_P.T).all()
+    assert np.linalg.eigvalsh(some_P).min() > 0.0
+    assert some_P[0, 0] >= full_P[0][0] - 1e-12 and some_P[0, 0] < P[0][0]

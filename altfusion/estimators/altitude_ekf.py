@@ -98,6 +98,7 @@ from altfusion.estimators.kalman import (
     rederive,
     shift_state,
     update_scalar,
+    update_scalar_of,
 )
 from altfusion.estimators.noise_check import WINDOW, NoiseCheck
 from altfusion.estimators.process_noise import MotionNoise, maximum_scale
@@ -485,12 +486,13 @@ class AltitudeEKF(Estimator):
         gate = p.gate_sigma                               # above: Var(h - t)
         if not ground.tells(above) or x[H] - x[T] + gate * math.sqrt(above) >= p.laser_max_height:
             return
-        R = ground.noise(above, self._noise_variance("laser", self.sensor_noise["laser"]))
-        if not ground.judge(y * y <= gate * gate * (above + R), x[V],
+        noise = self._noise_variance("laser", self.sensor_noise["laser"])
+        if not ground.judge(y * y <= gate * gate * (above + ground.spread() + noise), x[V],
                             math.sqrt(self.P[V][V])):
             return
+        R = ground.noise(above, noise)
         self._terrain_known = True                        # the terrain under the laser read
-        self.x, self.P, _ = update_scalar(x, self.P, row, y, R)
+        self.x, self.P = update_scalar_of(x, self.P, row, y, R, (H, V, D, K, T, G))
         self.accept(laser)
 
     def _adapt_motion_noise(self) -> None:

@@ -13,18 +13,26 @@ PX4 EKF2 synthesises a range measurement at the expected on-ground value (EKF2_M
 rangefinder keeps sending data that fails its checks (``range_height_control.cpp``). An
 estimator of the vertical axis alone has no land detector (no thrust, no contact). It reads
 an invalid laser frame as "the laser is between 0 and its minimum range m above the
-terrain": z = m/2, a reading anywhere in [0, m], of variance s = m²/12. The vehicle stands
-at one height there, the same for every frame, so the readings do not average (fused as
-independent at the laser's 100 Hz they made the height as certain as a hundred readings:
-measured 0.05 m off at ``h_std`` 0.005 m). A reading is fused only while the height above
-the terrain is less certain than s (its variance P > s), with the noise variance
-R = P·s/(P - s) + R_laser that leaves it at s (P·R/(P + R) = s, R_laser aside), when
+terrain": z = m/2, a reading anywhere in [0, m], of variance s = (m/2)²: its half-width
+taken as one standard deviation (the uniform's m/√12 put a vehicle standing at an end of
+the interval, as the simulated ones do, 1.7 of it from the middle, and the estimate's
+wander beyond two: |e| <= 2 ``h_std`` 60-80 % of the fault flight's time on the ground, 97 %
+now). The vehicle stands at one height there, the same for every frame, so the readings do
+not average (fused as independent at the laser's 100 Hz they made the height as certain as
+a hundred readings: measured 0.05 m off at ``h_std`` 0.005 m). A reading is fused only while
+the height above the terrain is less certain than s (its variance P > s), with the noise
+variance R = P·s/(P - s) + R_laser that leaves it at s (P·R/(P + R) = s, R_laser aside),
+and it moves every state but the accelerometer's bias (a Schmidt update,
+:func:`~altfusion.estimators.kalman.update_scalar_of`: a vehicle jostled on the ground, within
+[0, m] between readings, taught the bias its hops, and the take-off that followed ran 0.9 m
+off at ``h_std`` 0.06 m, xu2016_hover15 told nothing), when
 
 * the frame cannot mean "beyond the maximum range": the height above the terrain, plus
   ``gate_sigma`` times its standard deviation, is below the laser's maximum height (an
   invalid frame means out of range high as much as low; with the terrain unknown it means
   nothing);
-* the reading passes the gate (``gate_sigma``) and the vertical speed may be below
+* the reading passes the gate (``gate_sigma``, against P + s + R_laser: R, unbounded as P
+  nears s, would pass any reading) and the vertical speed may be below
   :data:`LANDED_SPEED` (within one standard deviation of it: a filter just started knows
   its speed to metres per second): otherwise the ground is refuted (a flying vehicle whose
   laser drops out, a take-off or hop with a laser that does not read), and no frame is
@@ -35,7 +43,7 @@ R = P·s/(P - s) + R_laser that leaves it at s (P·R/(P + R) = s, R_laser aside)
   taught the accelerometer's bias the hops (1.5 m off at ``h_std`` 0.13 m in the climb).
   With 5 standard deviations allowed the hops were read as ground again: 0.86 m RMS.
 
-Deviations from PX4 EKF2: the reading is the middle of [0, m] with its uniform variance, not
+Deviations from PX4 EKF2: the reading is the middle of [0, m] with its half-width as σ, not
 m with the range noise (a vehicle on its skids reads the laser's mounting height, anywhere
 below m), fused only while it tells something; no land detector, its place taken by the
 conditions above; without a gate (``gate_sigma`` 0) no reading, since nothing then tells the
@@ -60,8 +68,8 @@ class GroundRange:
         next valid frame."""
 
     def spread(self) -> float:
-        """s = m²/12, the variance of a height anywhere in [0, m]."""
-        return self.minimum * self.minimum / 12.0
+        """s = (m/2)², the variance taken for a height anywhere in [0, m]."""
+        return self.minimum * self.minimum / 4.0
 
     def reading(self) -> float:
         """The on-ground reading, m/2."""

@@ -364,6 +364,28 @@ def update_scalar(x: Vector, P: Matrix, H: Sequence[tuple[int, float]], innovati
     return x_new, list(map(P_flat.__getitem__, _row_slices(len(K)))), S
 
 
+def update_scalar_of(x: Vector, P: Matrix, H: Sequence[tuple[int, float]], innovation: float,
+                     variance: float, states: Sequence[int],
+                     ) -> tuple[list[float], list[list[float]]]:
+    """:func:`update_scalar` that moves only ``states`` (a Schmidt-Kalman, or "consider",
+    update: the gain of every other state is 0, their errors considered in S but not
+    estimated from the measurement); returns x and P.
+
+        K_i = r_i / S for i in states, 0 otherwise;  P = P⁻ - (K rᵀ + r Kᵀ) + S K Kᵀ
+
+    the Joseph form, right for any gain. P stays exactly symmetric."""
+    row = _times_row(P, H)
+    S = sparse_dot(row, H) + variance
+    K = [0.0] * len(x)
+    for i in states:
+        K[i] = row[i] / S
+    x_new = [xa + ka * innovation for xa, ka in zip(x, K, strict=True)]
+    P_new = [[p_ab - (k_a * r_b + r_a * k_b) + k_a * k_b * S
+              for p_ab, r_b, k_b in zip(P_a, row, K, strict=True)]
+             for P_a, r_a, k_a in zip(P, row, K, strict=True)]
+    return x_new, P_new
+
+
 @cache
 def _row_slices(n: int) -> tuple[slice, ...]:
     """The slices of the rows of an n x n matrix stored row after row in one list."""
