@@ -38,7 +38,7 @@ off at ``h_std`` 0.06 m, xu2016_hover15 told nothing), when
   laser drops out, a take-off or hop with a laser that does not read), and no frame is
   read so until the laser's next valid one. Measured with the laser's minimum range set
   above xu2016's hover (every frame invalid): the first hop refuted the ground, the flight
-  that followed as without the readings (RMS 0.64 m against 0.77 m, |e| within 2.2
+  that followed as without the readings (RMS 0.66 m against 0.77 m, |e| within 2.4
   ``h_std``), where readings fused whenever the speed allowed had held the height down and
   taught the accelerometer's bias the hops (1.5 m off at ``h_std`` 0.13 m in the climb).
   With 5 standard deviations allowed the hops were read as ground again: 0.86 m RMS.
