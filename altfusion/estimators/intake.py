@@ -1,17 +1,19 @@
 """Sample intake: an estimator's stream inputs, new samples, held samples, plausibility.
 
-A measurement update happens exactly once per new sample (its count changed). A sample that
-is invalid (its validity flag false) or not finite is ignored and noted (``n_ignored``); a
-value beyond its plausibility bound (:data:`~.streams.PLAUSIBLE_RANGE`) is rejected as its
-source's. With ``fault_detection`` a reading repeated bit for bit ``stuck_samples`` times
-in a row (:mod:`~altfusion.estimators.stuck`) is left out of its sample (the sample dropped
-when none of its measured values is left), its source refused and isolated, or, a GNSS
-reading while the receiver may hold still (the baro shows no climb:
-:meth:`SampleIntake._gnss_at_rest`), only held. An auxiliary value (the air temperature
-beside the baro height) outside its plausible interval
-(:data:`~.streams.PLAUSIBLE_AUXILIARY`) is left out of the sample, which is fused without it
-(the estimator reads it with ``sample.get``); each counts in ``n_ignored``, the first of a
-run is noted.
+A measurement update happens exactly once per new sample (its count changed). A frame
+flagged invalid (its validity flag false: a rangefinder out of its range sends one every
+period) is no sample: neither fused nor counted, only shown to
+:meth:`SampleIntake.frame_invalid` (AltitudeEKF reads the laser's as the ground it may stand
+on). A sample that is not finite is ignored and noted (``n_ignored``); a value beyond its
+plausibility bound (:data:`~.streams.PLAUSIBLE_RANGE`) is rejected as its source's. With
+``fault_detection`` a reading repeated bit for bit ``stuck_samples`` times in a row
+(:mod:`~altfusion.estimators.stuck`) is left out of its sample (the sample dropped when none
+of its measured values is left), its source refused and isolated, or, a GNSS reading while
+the receiver may hold still (the baro shows no climb: :meth:`SampleIntake._gnss_at_rest`),
+only held. An auxiliary value (the air temperature beside the baro height) outside its
+plausible interval (:data:`~.streams.PLAUSIBLE_AUXILIARY`) is left out of the sample, which
+is fused without it (the estimator reads it with ``sample.get``); each counts in
+``n_ignored``, the first of a run is noted.
 
 Time stamps. A sample stamped ahead of the estimator's clock is held until due: an engine
 that steps slow components first (ECOS) shows the estimator a 10 Hz GPS sample of t = 0.10 s
