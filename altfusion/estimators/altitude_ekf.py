@@ -90,6 +90,7 @@ from altfusion.estimators.aid_source import FUSED
 from altfusion.estimators.base import MAX_DELAY, Estimator, HealthParams, Verdict
 from altfusion.estimators.ground_range import GroundRange
 from altfusion.estimators.health import NOISE_CHECKED, STEP_BITS, UNKNOWN_STD
+from altfusion.estimators.health_params import PX4_HEIGHT_BIAS_PSD
 from altfusion.estimators.kalman import (
     decorrelate,
     inflate_along,
@@ -157,14 +158,12 @@ class AltitudeEKFParams(HealthParams):
     acc_bias_psd: float = param(1e-5, "m2/s5", "PSD of the accelerometer-bias random walk "
                                                "(PX4 EKF2_ACC_B_NOISE 0.003 m/s³ squared)",
                                 min=0.0)
-    baro_bias_psd: float = param(0.0169, "m2/s", "PSD of the random walk of the baro offset d "
-                                                 "(height_ref gps or range; PX4 EKF2's "
-                                                 "baro_bias_nsd 0.13 m/s/√Hz, squared)",
-                                 min=0.0)
-    gps_bias_psd: float = param(0.0169, "m2/s", "PSD of the random walk of the GNSS offset g "
-                                                "(height_ref baro or range; PX4 EKF2's "
-                                                "gps_hgt_bias_nsd 0.13 m/s/√Hz, squared)",
-                                min=0.0)
+    baro_bias_psd: float = param(PX4_HEIGHT_BIAS_PSD, "m2/s", "PSD of the random walk of the "
+                                 "baro offset d (height_ref gps or range; PX4 EKF2's "
+                                 "baro_bias_nsd 0.13 m/s/√Hz, squared)", min=0.0)
+    gps_bias_psd: float = param(PX4_HEIGHT_BIAS_PSD, "m2/s", "PSD of the random walk of the "
+                                "GNSS offset g (height_ref baro or range; PX4 EKF2's "
+                                "gps_hgt_bias_nsd 0.13 m/s/√Hz, squared)", min=0.0)
     baro_scale_psd: float = param(1e-6, "1/s", "PSD of the random walk of the baro scale "
                                                "factor k (1e-6: about 1 % per 100 s, the "
                                                "temperature and lapse-rate error of an "
@@ -301,7 +300,7 @@ class AltitudeEKF(Estimator):
                                   p.range_aid_max_height, p.range_hysteresis) \
             if p.range_aid else None
         """PX4's conditional range aid (None without ``range_aid``)."""
-        self.ground_range = GroundRange(p.laser_min_range) \
+        self.ground_range = GroundRange(p.laser_min_range, p.laser_max_height, p.gate_sigma) \
             if p.laser_min_range > 0.0 and p.gate_sigma > 0.0 else None
         """PX4's on-ground range (None without ``laser_min_range`` or a gate)."""
         self._laser_out = False           # an invalid laser frame arrived in this step
@@ -435,7 +434,7 @@ class AltitudeEKF(Estimator):
             elif name in self.noise_checks:
                 self.noise_checks[name].forget()
             if stream is LASER and self.ground_range is not None:
-                self.ground_range.refuted = False
+                self.ground_range.in_range()
         if self._laser_out:
             self._laser_out = False
             self._ground_reading()
@@ -479,16 +478,14 @@ class AltitudeEKF(Estimator):
         terrain less certain than the reading and not possibly beyond the laser's reach; the
         reading within the gate and the speed a standing vehicle's, else the ground refuted
         until the laser's next valid frame; never for an isolated laser."""
-        x, p, laser, ground = self.x, self.params, self.aid["laser"], self.ground_range
+        x, laser, ground = self.x, self.aid["laser"], self.ground_range
         if not self.started or laser.isolated:
             return
         y, above, row, _ = self._innovation("laser", ground.reading(), self.clock.now, 0.0)
-        gate = p.gate_sigma                               # above: Var(h - t)
-        if not ground.tells(above) or x[H] - x[T] + gate * math.sqrt(above) >= p.laser_max_height:
+        if not ground.tells(x[H] - x[T], above):          # above: Var(h - t)
             return
         noise = self._noise_variance("laser", self.sensor_noise["laser"])
-        if not ground.judge(y * y <= gate * gate * (above + ground.spread() + noise), x[V],
-                            math.sqrt(self.P[V][V])):
+        if not ground.judge(y, above, noise, x[V], math.sqrt(self.P[V][V])):
             return
         R = ground.noise(above, noise)
         self._terrain_known = True                        # the terrain under the laser read

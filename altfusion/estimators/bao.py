@@ -211,7 +211,8 @@ class BaoDriftEstimator(Estimator):
         """Principle (eq. 5) and wind (eq. 11) corrections of one baro sample, after the gate
         on its jump from the last accepted one (not in the paper)."""
         p = self.params
-        factor = min(self._check_baro_noise(h_baro), SHOWN_MAXIMUM)
+        self._check_baro_noise(h_baro)
+        factor = min(self._baro_noise_factor(), SHOWN_MAXIMUM)
         if not self.started:
             self.accept(self.aid["baro"])
         else:
@@ -275,20 +276,25 @@ class BaoDriftEstimator(Estimator):
             return None
         return ShownNoise(self.aid["baro"], maximum=SCATTER_MAXIMUM)
 
-    def _check_baro_noise(self, h_baro: float) -> float:
+    def _baro_noise_factor(self) -> float:
         """The factor the baro's scatter shows on ``R_baro`` (1 without the check or while
-        not shown): each sample's difference from the previous one is checked with variance
+        not shown)."""
+        check = self._baro_scatter
+        return 1.0 if check is None else check.factor
+
+    def _check_baro_noise(self, h_baro: float) -> None:
+        """The baro's scatter check fed ``h_baro``: each sample's difference from the
+        previous one is checked with variance
         3·R_baro, so that a pair of them, a second difference h_k - 2h_(k-1) + h_(k-2),
         is judged against its variance 6·R_baro for white noise (successive differences
         share a sample: the check's S_k + S_(k-1) is that of their difference). The motion
         cancels in it but for the acceleration's a·Δt² (1 mm at 10 m/s² and 100 Hz)."""
         check = self._baro_scatter
         if check is None:
-            return 1.0
+            return
         previous, self._baro_previous = self._baro_previous, h_baro
         if previous is not None:
             check.gated(h_baro - previous, 3.0 * self.params.R_baro)
-        return check.factor
 
     def reset_height(self, source: str, innovation: float, variance: float) -> None:
         """A baro reset takes the new baro level; a GPS reset moves the drift estimate."""
@@ -303,6 +309,4 @@ class BaoDriftEstimator(Estimator):
         self.drift_std = math.sqrt(self.P)
         self.h_est = self.h_baro_corrected + self.drift
         self.vz_est = 0.0
-        check = self._baro_scatter
-        factor = check.factor if check is not None else 1.0
-        self.h_std = math.sqrt(self.P + factor * self.params.R_baro)
+        self.h_std = math.sqrt(self.P + self._baro_noise_factor() * self.params.R_baro)

@@ -50,22 +50,28 @@ conditions above; without a gate (``gate_sigma`` 0) no reading, since nothing th
 ground from a dropout.
 """
 
+import math
+
 LANDED_SPEED = 0.5
 """Largest vertical speed of a vehicle that may stand on the ground, m/s (PX4's multicopter
 land detector, LNDMC_Z_VEL_MAX's default)."""
 
 
 class GroundRange:
-    """The on-ground reading of a laser of minimum range ``minimum`` (m)."""
+    """The on-ground reading of a laser of minimum range ``minimum`` and maximum height
+    ``maximum`` (m), judged with the estimator's gate of ``gate`` standard deviations."""
 
-    __slots__ = ("minimum", "refuted")
+    __slots__ = ("minimum", "maximum", "gate", "refuted")
 
-    def __init__(self, minimum: float) -> None:
+    def __init__(self, minimum: float, maximum: float, gate: float) -> None:
         self.minimum = minimum
         """The laser's minimum range, m: the ground reading lies in [0, it]."""
+        self.maximum = maximum
+        """The laser's maximum height, m: beyond it an invalid frame means out of range."""
+        self.gate = gate
         self.refuted = False
         """A reading failed the gate, or the vehicle moved: no reading until the laser's
-        next valid frame."""
+        next valid frame (:meth:`in_range`)."""
 
     def spread(self) -> float:
         """s = (m/2)², the variance taken for a height anywhere in [0, m]."""
@@ -82,16 +88,26 @@ class GroundRange:
         s = self.spread()
         return variance * s / (variance - s) + noise_variance
 
-    def tells(self, variance: float) -> bool:
-        """Whether a reading tells anything about a height above the terrain of that
-        ``variance``: it is less certain than :meth:`spread`, and the ground not refuted."""
-        return variance > self.spread() and not self.refuted
+    def in_range(self) -> None:
+        """The laser read a valid frame: the ground may be read again."""
+        self.refuted = False
 
-    def judge(self, consistent: bool, speed: float, speed_sigma: float) -> bool:
-        """Whether the reading is fused: it is ``consistent`` with the estimate (within the
-        gate) and the vertical ``speed`` may be one of a vehicle standing on the ground
-        (within :data:`LANDED_SPEED` plus ``speed_sigma``, its standard deviation: a filter
-        just started knows its speed to metres per second); if not, the ground is
-        refuted."""
+    def tells(self, height: float, variance: float) -> bool:
+        """Whether a reading tells anything about a ``height`` above the terrain of that
+        ``variance``: the ground not refuted, the height less certain than :meth:`spread`
+        and, with ``gate`` of its standard deviation, within the laser's reach."""
+        return not self.refuted and variance > self.spread() \
+            and height + self.gate * math.sqrt(variance) < self.maximum
+
+    def judge(self, innovation: float, variance: float, noise_variance: float, speed: float,
+              speed_sigma: float) -> bool:
+        """Whether the reading is fused: its ``innovation`` within the gate of the height's
+        ``variance`` plus :meth:`spread` and the laser's ``noise_variance``, and the vertical
+        ``speed`` one a vehicle standing on the ground may have (within :data:`LANDED_SPEED`
+        plus ``speed_sigma``, its standard deviation: a filter just started knows its speed
+        to metres per second); if not, the ground is refuted."""
+        gate = self.gate
+        consistent = innovation * innovation <= gate * gate * (variance + self.spread()
+                                                               + noise_variance)
         self.refuted = not (consistent and abs(speed) < LANDED_SPEED + speed_sigma)
         return not self.refuted

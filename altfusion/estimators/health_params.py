@@ -5,6 +5,11 @@ from dataclasses import dataclass
 
 from altfusion.params import param
 
+PX4_HEIGHT_BIAS_PSD = 0.0169
+"""The random walk of a height source's offset, m²/s: PX4 EKF2's height-bias estimators'
+process noise (``baro_bias_nsd``, ``gps_hgt_bias_nsd``: 0.13 m/s/√Hz, ``common.h``), squared;
+the default of every estimator's offset walk that follows PX4."""
+
 
 @dataclass(frozen=True)
 class HealthParams:

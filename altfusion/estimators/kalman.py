@@ -355,13 +355,7 @@ def update_scalar(x: Vector, P: Matrix, H: Sequence[tuple[int, float]], innovati
     row = _times_row(P, H)
     S = sparse_dot(row, H) + variance
     K = list(map(truediv, row, repeat(S)))                         # r / S, without a frame
-    x_new = list(map(add, x, map(mul, K, repeat(innovation))))     # x + K y, without a frame
-    # One flat comprehension (a frame per row costs more than its arithmetic), cut into
-    # rows by map.
-    P_flat = [p_ab - (k_a * r_b + r_a * k_b) + k_a * k_b * S
-              for P_a, r_a, k_a in zip(P, row, K)
-              for p_ab, r_b, k_b in zip(P_a, row, K)]
-    return x_new, list(map(P_flat.__getitem__, _row_slices(len(K)))), S
+    return (*_gain_step(x, P, row, K, S, innovation), S)
 
 
 def update_scalar_of(x: Vector, P: Matrix, H: Sequence[tuple[int, float]], innovation: float,
@@ -379,11 +373,21 @@ def update_scalar_of(x: Vector, P: Matrix, H: Sequence[tuple[int, float]], innov
     K = [0.0] * len(x)
     for i in states:
         K[i] = row[i] / S
-    x_new = [xa + ka * innovation for xa, ka in zip(x, K, strict=True)]
-    P_new = [[p_ab - (k_a * r_b + r_a * k_b) + k_a * k_b * S
-              for p_ab, r_b, k_b in zip(P_a, row, K, strict=True)]
-             for P_a, r_a, k_a in zip(P, row, K, strict=True)]
-    return x_new, P_new
+    return _gain_step(x, P, row, K, S, innovation)
+
+
+def _gain_step(x: Vector, P: Matrix, row: list[float], K: list[float], S: float,
+               innovation: float) -> tuple[list[float], list[list[float]]]:
+    """x + K y and the Joseph form P - (K rᵀ + r Kᵀ) + S K Kᵀ of a scalar update of gain K
+    (r = P Hᵀ, S its innovation variance), each entry's sum the same float for (a, b) and
+    (b, a)."""
+    x_new = list(map(add, x, map(mul, K, repeat(innovation))))     # x + K y, without a frame
+    # One flat comprehension (a frame per row costs more than its arithmetic), cut into
+    # rows by map.
+    P_flat = [p_ab - (k_a * r_b + r_a * k_b) + k_a * k_b * S
+              for P_a, r_a, k_a in zip(P, row, K)
+              for p_ab, r_b, k_b in zip(P_a, row, K)]
+    return x_new, list(map(P_flat.__getitem__, _row_slices(len(K))))
 
 
 @cache

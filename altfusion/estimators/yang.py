@@ -86,6 +86,7 @@ from dataclasses import dataclass
 
 from altfusion.estimators.aid_source import FUSED
 from altfusion.estimators.base import MAX_DELAY, Estimator, HealthParams
+from altfusion.estimators.health_params import PX4_HEIGHT_BIAS_PSD
 from altfusion.estimators.kalman import (
     constant_states_noise,
     predict_constant_acceleration,
@@ -180,10 +181,9 @@ class YangParams(HealthParams):
     P0_baro_bias: float = param(0.0, "m2", "Initial variance of the baro-offset state (0: the "
                                            "baro calibrated at the start, as in yang2020); "
                                            "with fault_detection only", min=0.0)
-    baro_bias_psd: float = param(0.0169, "m2/s", "Spectral density of the baro offset's "
-                                                 "random walk (PX4 EKF2 baro_bias_nsd: 0.13 "
-                                                 "m/s/√Hz); with fault_detection only",
-                                 min=0.0)
+    baro_bias_psd: float = param(PX4_HEIGHT_BIAS_PSD, "m2/s", "Spectral density of the baro "
+                                 "offset's random walk (PX4 EKF2 baro_bias_nsd: 0.13 m/s/√Hz); "
+                                 "with fault_detection only", min=0.0)
     gps_bias_psd: float = param(0.0, "m2/s", "Spectral density of the random walk of a GPS "
                                              "height offset state (from 0, known: the GPS "
                                              "unbiased at the start; 0: no such state, the "
