@@ -460,6 +460,32 @@ def test_a_datum_move_leaves_the_offsets_no_sample_has_set():
     assert abs(flight.ekf.h_est - 430.0) < 1.0
 
 
+
+@pytest.mark.parametrize("told, terrain, height, tolerance", [
+    ({"terrain_h": 0.0, "P0_terrain": 1e-8, "terrain_psd": 0.0}, 0.0, TRUE_H, 0.05),
+    ({}, 25.0, TRUE_H + 25.0, 1.5)])
+def test_a_first_range_sample_moves_the_height_where_the_terrain_is_known_better(
+        told, terrain, height, tolerance):
+    """The filter starts on a GNSS sample 25 m high (83 σ of the stated 0.3 m: a receiver
+    noisier than told), then the laser's first sample reads the true 10 m. Over a terrain
+    told (0 m, known to 0.1 mm) the disagreement is the height's: it moves onto the laser
+    and the terrain stays; over an unknown terrain (the default prior, 10 m σ, less known
+    than the height's 0.3 m) the laser's sample sets the terrain, 25 m. Told, the height then
+    stays with the laser and the GNSS's later samples (each within 1 m: 3 σ) agree with it.
+    Before, the told terrain went to 25 m and the height stayed with the first sample.
+    Tolerances: 5 σ of the sample that places each (the laser's 0.01 m, the GNSS's 0.3 m)."""
+    flight = Flight(**told)
+    flight.fly(0.1, baro=None, gps=25.0)                # one GNSS sample, at its end
+    flight.fly(STEP, baro=None, gps=None, laser=0.0)
+    assert flight.ekf.terrain_est == pytest.approx(terrain, abs=tolerance)
+    assert flight.ekf.h_est == pytest.approx(height, abs=tolerance)
+    if told:
+        flight.fly(20.0, laser=0.0)
+        assert flight.ekf.h_est == pytest.approx(TRUE_H, abs=0.05)
+        assert flight.ekf.terrain_est == pytest.approx(0.0, abs=1e-3)
+        assert not flight.isolated("gps") and flight.ekf.n_height_resets == 0
+
+
 def wave_flight(seed: int, seconds: float, centre: float, swing: float, ripple: float,
                 radar: bool = False):
     """AltitudeEKF told nothing on a flight of height centre + swing·sin(2πt/40 s) +

@@ -794,9 +794,17 @@ class AltitudeEKF(Estimator):
         or the rangefinders' t) that disagrees with the state's prior (``P0_offset``,
         ``P0_terrain``: beyond the gate) sets that state (d = z - h, g = z - h or
         t = h - z, uncorrelated, Var = Var h + R) and is consumed; one that agrees is fused
-        as any sample (a calibrated baro, a known terrain). With ``height_ref`` range the
-        terrain is the datum from the first range sample on (variance 0): set by it if it
-        disagrees with the prior, else the prior itself. True if consumed."""
+        as any sample (a calibrated baro, a known terrain). Over a terrain told (its prior
+        known better than both the height and the range sample) the disagreement is the
+        height's: the height moves onto the sample instead, h = z + t (:meth:`reset_height`,
+        Var h = Var t + R; the offsets d and g learnt anew), and the terrain stays.
+        (Measured: a 30 m GNSS told 6 m started the filter 28 m off on the ground; the
+        radar's first sample took the told terrain to 28 m, and the height stayed 2-3 m off
+        for the flight at an ``h_std`` of 1 m.) The offsets' default priors and an unknown
+        terrain's are vague (a GNSS datum at sea level over a terrain at 400 m) and do
+        not move the height. With ``height_ref`` range the terrain is the datum from the
+        first range sample on (variance 0): set by it if it disagrees with the prior, else
+        the prior itself. True if consumed."""
         if source == self._reference and not self._reference_seen:
             self._reference_seen = True
             return self._first_reference(z, R)
@@ -814,6 +822,13 @@ class AltitudeEKF(Estimator):
         frozen = index == T and self.params.height_ref == "range"
         if consistent and not frozen:
             return False                                  # fused as any sample
+        if index == T and not (consistent or frozen) \
+                and self.P[T][T] < min(self.P[H][H], R):  # a terrain told: h onto z + t
+            self.reset_height(source, -y, self.P[T][T] + R)
+            self.note(f"{source}: first sample {-y:.4g} m from the height over the terrain "
+                      f"told: height moved onto it")
+            self.accept(self.aid[source])
+            return True
         for j in range(N):
             self.P[index][j] = self.P[j][index] = 0.0
         if consistent:
