@@ -486,6 +486,26 @@ def test_a_first_range_sample_moves_the_height_where_the_terrain_is_known_better
         assert not flight.isolated("gps") and flight.ekf.n_height_resets == 0
 
 
+
+@pytest.mark.parametrize("seed", [1, 2, 3, 4])
+def test_a_rise_of_the_references_noise_leaves_the_priors_share_of_the_datum(seed):
+    """The GNSS (the reference) told nothing, its samples 3 m off at random (its noise is
+    measured, starting at 100x a typical receiver's variance; the first pairs' upper bounds
+    raise the factor 2.7-72 times above that), and a baro calibrated to the datum
+    (``P0_offset`` 0.01 m²: 0.1 m). The rise makes what the GNSS's samples taught less
+    certain, not what the baro's prior places: 3 s in, ``h_std`` is at most 0.2 m (2x the
+    prior's σ) and the error within 3 ``h_std``. Before, the whole Var h was multiplied by
+    the rise: ``h_std`` 0.28-1.07 m with errors up to 0.72 m."""
+    flight, rows = Flight(seed=seed, gps_noise=0.0, P0_offset=0.01), []
+    rng = np.random.default_rng(seed)
+    for _ in range(round(3.0 / STEP)):
+        flight.fly(STEP, gps=3.0 * rng.standard_normal(), record=rows)
+    assert flight.ekf.noise_checks["gps"].peak > 100.0      # the factor rose past its start
+    _, h_est, h_std, h_valid, _ = rows[-1]
+    assert h_valid and h_std <= 0.2
+    assert abs(h_est - TRUE_H) <= 3.0 * h_std
+
+
 def wave_flight(seed: int, seconds: float, centre: float, swing: float, ripple: float,
                 radar: bool = False):
     """AltitudeEKF told nothing on a flight of height centre + swing·sin(2πt/40 s) +

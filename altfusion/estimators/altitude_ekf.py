@@ -308,6 +308,9 @@ class AltitudeEKF(Estimator):
         self._reference_rejected_since: float | None = None
         self._reference_sample = (0.0, 0.0, 1.0)       # its last rejected (z, stamp, σ)
         self._reference_seen = False
+        self._reference_information = 0.0
+        """Σ 1/R of the reference's samples fused since the datum was last set, 1/m²: the
+        share of the datum's information its samples gave (:meth:`_datum_follows_noise`)."""
         self._datum_variance = 0.0
         """The datum's variance that no sample shows, m², after the last GNSS height sample
         (nothing else moves it: :meth:`_slow_error`)."""
@@ -630,6 +633,8 @@ class AltitudeEKF(Estimator):
             if source == self._reference:
                 self._reference_rejected_since = None
             self.x, self.P, _ = update_scalar(self.x, self.P, row, y, R + slow_R)
+            if source == self._reference:
+                self._reference_information += 1.0 / (R + slow_R)
         if source == self._reference:
             self._datum_follows_noise()
 
@@ -785,6 +790,7 @@ class AltitudeEKF(Estimator):
                 self._offset_known[source] = True
         self.h_c = x[H]
         self._reference_seen = source == self._reference
+        self._reference_information = 1.0 / R if self._reference_seen else 0.0
         self.started = True
         self.accept(self.aid[source])
 
@@ -857,6 +863,7 @@ class AltitudeEKF(Estimator):
         direction = self._datum_direction()
         self.x = [xi + ui * y for xi, ui in zip(self.x, direction, strict=True)]
         move_datum(self.P, H, direction, R)
+        self._reference_information = 1.0 / R
         self.note(f"{self._reference}: first sample of the height reference {y:.4g} m from "
                   f"the height: datum moved onto it")
         self.accept(self.aid[self._reference])
@@ -882,15 +889,27 @@ class AltitudeEKF(Estimator):
         return direction
 
     def _datum_follows_noise(self) -> None:
-        """The reference's noise check raised its factor above its earlier peak by r: the
-        datum, which its samples taught, is that much less certain: Var h ← r·Var h along
-        the datum direction (:func:`~altfusion.estimators.kalman.inflate_along`), every
-        difference the other sources see unchanged. (A noise stated x0.2 or not stated
-        would otherwise leave the first samples' average, weighted as precise, with an
-        ``h_std`` of the stated noise for minutes.)"""
+        """The reference's noise check raised its factor above its earlier peak by r: what
+        its samples taught the datum is that much less certain. Of the datum's information
+        1/Var h, the share I its samples gave (Σ 1/R since the datum was set, at most
+        1/Var h) falls to I/r, the rest (the offsets' priors: a calibrated baro, a terrain
+        told) stays: Var h ← 1/(1/Var h - I·(1 - 1/r)) along the datum direction
+        (:func:`~altfusion.estimators.kalman.inflate_along`), every difference the other
+        sources see unchanged. (A noise stated x0.2 or not stated would otherwise leave the
+        first samples' average, weighted as precise, with an ``h_std`` of the stated noise
+        for minutes.) Deviation from the first form, Var h ← r·Var h: right where the
+        reference alone placed the datum, it took the priors' share for the reference's
+        too; a GNSS not stated, its first pair's bound 30x its start, lifted xu2016_hover15's
+        ``h_std`` from 10 m, the baro offset's prior, to 52 m, and the ground could not be
+        read for 2 s (told nothing: RMS 4.6x the told noise's, 3.3x now; whang2008 1.55x,
+        1.16x now)."""
         check = self.noise_checks.get(self._reference)
         if check is not None and check.rise > 1.0:
-            inflate_along(self.P, self._datum_direction(), (check.rise - 1.0) * self.P[H][H])
+            variance = self.P[H][H]
+            shown = min(self._reference_information, 1.0 / variance)
+            grown = 1.0 / (1.0 / variance - shown * (1.0 - 1.0 / check.rise))
+            inflate_along(self.P, self._datum_direction(), grown - variance)
+            self._reference_information = shown / check.rise
 
     def _slow_error(self) -> None:
         """After each GNSS height sample, the variance of the GNSS's slow error
@@ -955,6 +974,8 @@ class AltitudeEKF(Estimator):
         samples, unless the reset was onto that source."""
         i = V if source == "gps_vz" else H
         shift_state(self.x, self.P, i, innovation, variance)
+        if i == H:
+            self._reference_information = 1.0 / variance if source == self._reference else 0.0
         for check in self.noise_checks.values():       # every prediction moved
             check.forget()
         if i == H:                        # the other sources' offsets: learnt anew
