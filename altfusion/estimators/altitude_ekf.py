@@ -123,6 +123,13 @@ each source's noise starts when the user states none (its ``<source>_noise`` at 
 check then measures it (:mod:`~altfusion.estimators.noise_check`)."""
 
 
+def information(variance: float) -> float:
+    """1/variance, the information of a measurement of that variance, 1/m²; infinite for a
+    variance of 0 (a reading rounded to exact: the datum's share is then capped at 1/Var h
+    where it is used, never a division by zero)."""
+    return 1.0 / variance if variance > 0.0 else math.inf
+
+
 @dataclass(frozen=True)
 class AltitudeEKFParams(HealthParams):
     baro_noise: float = param(0.0, "m", "Baro height noise, 1σ (0: not stated: measured "
@@ -310,7 +317,8 @@ class AltitudeEKF(Estimator):
         self._reference_seen = False
         self._reference_information = 0.0
         """Σ 1/R of the reference's samples fused since the datum was last set, 1/m²: the
-        share of the datum's information its samples gave (:meth:`_datum_follows_noise`)."""
+        share of the datum's information its samples gave (:meth:`_datum_follows_noise`;
+        :func:`information`)."""
         self._datum_variance = 0.0
         """The datum's variance that no sample shows, m², after the last GNSS height sample
         (nothing else moves it: :meth:`_slow_error`)."""
@@ -634,7 +642,7 @@ class AltitudeEKF(Estimator):
                 self._reference_rejected_since = None
             self.x, self.P, _ = update_scalar(self.x, self.P, row, y, R + slow_R)
             if source == self._reference:
-                self._reference_information += 1.0 / (R + slow_R)
+                self._reference_information += information(R + slow_R)
         if source == self._reference:
             self._datum_follows_noise()
 
@@ -790,7 +798,7 @@ class AltitudeEKF(Estimator):
                 self._offset_known[source] = True
         self.h_c = x[H]
         self._reference_seen = source == self._reference
-        self._reference_information = 1.0 / R if self._reference_seen else 0.0
+        self._reference_information = information(R) if self._reference_seen else 0.0
         self.started = True
         self.accept(self.aid[source])
 
@@ -804,9 +812,9 @@ class AltitudeEKF(Estimator):
         known better than both the height and the range sample) the disagreement is the
         height's: the height moves onto the sample instead, h = z + t (:meth:`reset_height`,
         Var h = Var t + R; the offsets d and g learnt anew), and the terrain stays.
-        (Measured: a 30 m GNSS told 6 m started the filter 28 m off on the ground; the
-        radar's first sample took the told terrain to 28 m, and the height stayed 2-3 m off
-        for the flight at an ``h_std`` of 1 m.) The offsets' default priors and an unknown
+        (Else a 30 m GNSS told 6 m, starting the filter 28 m off on the ground, had the
+        radar's first sample take the told terrain to 28 m, and the height stayed 2-3 m off
+        at an ``h_std`` of 1 m: docs/altitude_ekf.md.) The offsets' default priors and an unknown
         terrain's are vague (a GNSS datum at sea level over a terrain at 400 m) and do
         not move the height. With ``height_ref`` range the terrain is the datum from the
         first range sample on (variance 0): set by it if it disagrees with the prior, else
@@ -863,7 +871,7 @@ class AltitudeEKF(Estimator):
         direction = self._datum_direction()
         self.x = [xi + ui * y for xi, ui in zip(self.x, direction, strict=True)]
         move_datum(self.P, H, direction, R)
-        self._reference_information = 1.0 / R
+        self._reference_information = information(R)
         self.note(f"{self._reference}: first sample of the height reference {y:.4g} m from "
                   f"the height: datum moved onto it")
         self.accept(self.aid[self._reference])
@@ -897,15 +905,13 @@ class AltitudeEKF(Estimator):
         (:func:`~altfusion.estimators.kalman.inflate_along`), every difference the other
         sources see unchanged. (A noise stated x0.2 or not stated would otherwise leave the
         first samples' average, weighted as precise, with an ``h_std`` of the stated noise
-        for minutes.) Deviation from the first form, Var h ← r·Var h: right where the
-        reference alone placed the datum, it took the priors' share for the reference's
-        too; a GNSS not stated, its first pair's bound 30x its start, lifted xu2016_hover15's
-        ``h_std`` from 10 m, the baro offset's prior, to 52 m, and the ground could not be
-        read for 2 s (told nothing: RMS 4.6x the told noise's, 3.3x now; whang2008 1.55x,
-        1.16x now)."""
+        for minutes.) The whole Var h times r, right only where the reference alone placed
+        the datum, took the priors' share for the reference's: a GNSS not stated, its first
+        pair's bound 30x its start, lifted xu2016_hover15's ``h_std`` from the baro
+        offset's 10 m to 52 m (docs/altitude_ekf.md has the figures)."""
         check = self.noise_checks.get(self._reference)
-        if check is not None and check.rise > 1.0:
-            variance = self.P[H][H]
+        variance = self.P[H][H]
+        if check is not None and check.rise > 1.0 and variance > 0.0:
             shown = min(self._reference_information, 1.0 / variance)
             grown = 1.0 / (1.0 / variance - shown * (1.0 - 1.0 / check.rise))
             inflate_along(self.P, self._datum_direction(), grown - variance)
@@ -975,7 +981,8 @@ class AltitudeEKF(Estimator):
         i = V if source == "gps_vz" else H
         shift_state(self.x, self.P, i, innovation, variance)
         if i == H:
-            self._reference_information = 1.0 / variance if source == self._reference else 0.0
+            self._reference_information = information(variance) \
+                if source == self._reference else 0.0
         for check in self.noise_checks.values():       # every prediction moved
             check.forget()
         if i == H:                        # the other sources' offsets: learnt anew
