@@ -86,6 +86,52 @@ def test_a_laser_dropping_out_in_flight_does_not_pull_the_height_down():
     assert ekf.ground_range.refuted
 
 
+SITE = {key: TOLD[key] for key in ("terrain_h", "P0_terrain", "terrain_psd")}
+"""Told nothing but the site: every noise measured from its typical value."""
+
+
+def first_second(seed: int, h: float, **params) -> tuple[int | None, np.ndarray]:
+    """10 s standing at ``h`` with every laser frame invalid: the step of the first laser
+    fusion (None: never) and (error, h_std, status) per step."""
+    ekf = AltitudeEKF(AltitudeEKF.Params(**params), step_size=STEP)
+    feed, rng = StreamFeeder(ekf), np.random.default_rng(seed)
+    rows = np.array(fly(ekf, feed, rng, 10.0, h, False))
+    fused = np.flatnonzero(rows[:, 2].astype(np.int64) & LASER_FUSED)
+    return (int(fused[0]) if fused.size else None), rows
+
+
+def test_told_nothing_the_ground_is_presumed_and_read_from_the_start():
+    """Told nothing, the height is known to ~10 m in the first seconds (the baro offset's
+    prior, the first GNSS pairs' bounds): at 5σ the vehicle might be beyond the laser's
+    25 m, and the ground was read only after 1.2-1.6 s, the height meanwhile following the
+    GNSS's first samples (measured: 2.1-3.3 m off at most in 0.3-2 s). Presumed on the
+    ground (PX4's land detector boots landed), at 2σ, it is read within 0.06 s (measured
+    0.04-0.06 s) and the height stays within 0.12-0.29 m: asserted, the first fusion within
+    0.1 s and the height within 0.5 m over 0.3-2 s, against beyond 1 m without the
+    presumption. Seeds 1-8."""
+    for seed in range(1, 9):
+        first, rows = first_second(seed, 0.0, **SITE)
+        assert first is not None and first <= 10
+        assert np.abs(rows[30:200, 0]).max() < 0.5
+        first, rows = first_second(seed, 0.0, **SITE, starts_on_ground=False)
+        assert first is not None and first > 100
+        assert np.abs(rows[30:200, 0]).max() > 1.0
+
+
+def test_an_airborne_start_beyond_the_reach_is_not_read_as_the_ground():
+    """Started hovering at 26 m and 40 m, just beyond the laser's 25 m and within the gate's
+    reach of the ground reading (5σ of 10 m told nothing), every frame invalid: the height
+    is never within 2σ of the reach, no frame is read as the ground, and the height stays
+    on the hover (measured within 1.5 m after 9 s, told the noise or nothing; asserted
+    2 m). Seeds 1-4."""
+    for h in (26.0, 40.0):
+        for told in (TOLD, SITE):
+            for seed in range(1, 5):
+                first, rows = first_second(seed, h, **told)
+                assert first is None
+                assert np.abs(rows[-100:, 0]).max() < 2.0
+
+
 def test_a_minimum_range_beyond_the_maximum_height_is_refused():
     with pytest.raises(ParameterError, match="laser_min_range"):
         AltitudeEKF(AltitudeEKF.Params(laser_min_range=30.0), step_size=STEP)

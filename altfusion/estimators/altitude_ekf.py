@@ -206,6 +206,12 @@ class AltitudeEKFParams(HealthParams):
                                              "xu2016: 0.1 m): an invalid laser frame while "
                                              "the vehicle may stand on the ground reads "
                                              "between 0 and it (0: never)", min=0.0)
+    starts_on_ground: bool = param(True, None, "The vehicle stands on the ground when the "
+                                               "estimator starts (PX4's land detector boots "
+                                               "landed): until the laser's first valid frame "
+                                               "its invalid ones are read as the ground while "
+                                               "the height is 2σ within the laser's reach, "
+                                               "not 5σ")
     radar_max_height: float = param(5000.0, "m", "The radio altimeter is fused below this "
                                                  "range", positive=True)
     range_hysteresis: float = param(1.0, "m", "A rangefinder switched off above its "
@@ -307,7 +313,8 @@ class AltitudeEKF(Estimator):
                                   p.range_aid_max_height, p.range_hysteresis) \
             if p.range_aid else None
         """PX4's conditional range aid (None without ``range_aid``)."""
-        self.ground_range = GroundRange(p.laser_min_range, p.laser_max_height, p.gate_sigma) \
+        self.ground_range = GroundRange(p.laser_min_range, p.laser_max_height, p.gate_sigma,
+                                        p.starts_on_ground) \
             if p.laser_min_range > 0.0 and p.gate_sigma > 0.0 else None
         """PX4's on-ground range (None without ``laser_min_range`` or a gate)."""
         self._laser_out = False           # an invalid laser frame arrived in this step

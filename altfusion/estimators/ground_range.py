@@ -43,6 +43,17 @@ off at ``h_std`` 0.06 m, xu2016_hover15 told nothing), when
   taught the accelerometer's bias the hops (1.5 m off at ``h_std`` 0.13 m in the climb).
   With 5 standard deviations allowed the hops were read as ground again: 0.86 m RMS.
 
+Until the vehicle is seen to fly (the laser's first valid frame, or a reading refuted) it is
+presumed on the ground, as PX4's land detector boots "landed": the reach is then judged at
+:data:`PRESUMED_SIGMA` standard deviations rather than the gate's. A filter told nothing
+knows its height to the baro offset's prior and the first GNSS pairs' bounds, 10 m, for
+its first seconds: 5σ put the vehicle possibly beyond the 25 m reach for 0.3-1.8 s, the
+height followed the first GNSS samples meanwhile, 0.16-1.42 m off (xu2016_hover15 told
+nothing: 3.3x the RMS told the noise, where the ground was read from 0.2 s on). Started in
+the air beyond the reach, the vehicle's frames are read as the ground only with its
+estimate 2σ short of the truth (2.3 %; and the gate's 5σ stands); ``presumed`` False
+(AltitudeEKF's ``starts_on_ground``) judges at the gate's from the start.
+
 Deviations from PX4 EKF2: the reading is the middle of [0, m] with its half-width as σ, not
 m with the range noise (a vehicle on its skids reads the laser's mounting height, anywhere
 below m), fused only while it tells something; no land detector, its place taken by the
@@ -51,6 +62,10 @@ ground from a dropout.
 """
 
 import math
+
+PRESUMED_SIGMA = 2.0
+"""Standard deviations of the height above the terrain that must stay within the laser's
+reach while the vehicle is presumed on the ground (one-sided 97.7 %; the gate's otherwise)."""
 
 LANDED_SPEED = 0.5
 """Largest vertical speed of a vehicle that may stand on the ground, m/s (PX4's multicopter
@@ -61,9 +76,10 @@ class GroundRange:
     """The on-ground reading of a laser of minimum range ``minimum`` and maximum height
     ``maximum`` (m), judged with the estimator's gate of ``gate`` standard deviations."""
 
-    __slots__ = ("minimum", "maximum", "gate", "refuted")
+    __slots__ = ("minimum", "maximum", "gate", "refuted", "presumed")
 
-    def __init__(self, minimum: float, maximum: float, gate: float) -> None:
+    def __init__(self, minimum: float, maximum: float, gate: float,
+                 presumed: bool = True) -> None:
         self.minimum = minimum
         """The laser's minimum range, m: the ground reading lies in [0, it]."""
         self.maximum = maximum
@@ -72,6 +88,9 @@ class GroundRange:
         self.refuted = False
         """A reading failed the gate, or the vehicle moved: no reading until the laser's
         next valid frame (:meth:`in_range`)."""
+        self.presumed = presumed
+        """The vehicle presumed on the ground: not yet seen to fly (a valid frame, a reading
+        refuted); its reach then judged at :data:`PRESUMED_SIGMA`."""
 
     def spread(self) -> float:
         """s = (m/2)², the variance taken for a height anywhere in [0, m]."""
@@ -89,15 +108,18 @@ class GroundRange:
         return variance * s / (variance - s) + noise_variance
 
     def in_range(self) -> None:
-        """The laser read a valid frame: the ground may be read again."""
-        self.refuted = False
+        """The laser read a valid frame: the ground may be read again, and is no longer
+        presumed."""
+        self.refuted = self.presumed = False
 
     def tells(self, height: float, variance: float) -> bool:
         """Whether a reading tells anything about a ``height`` above the terrain of that
         ``variance``: the ground not refuted, the height less certain than :meth:`spread`
-        and, with ``gate`` of its standard deviation, within the laser's reach."""
+        and, with ``gate`` of its standard deviations (:data:`PRESUMED_SIGMA`, if fewer,
+        while the ground is presumed), within the laser's reach."""
+        sigmas = min(self.gate, PRESUMED_SIGMA) if self.presumed else self.gate
         return not self.refuted and variance > self.spread() \
-            and height + self.gate * math.sqrt(variance) < self.maximum
+            and height + sigmas * math.sqrt(variance) < self.maximum
 
     def judge(self, innovation: float, variance: float, noise_variance: float, speed: float,
               speed_sigma: float) -> bool:
@@ -110,4 +132,5 @@ class GroundRange:
         consistent = innovation * innovation <= gate * gate * (variance + self.spread()
                                                                + noise_variance)
         self.refuted = not (consistent and abs(speed) < LANDED_SPEED + speed_sigma)
+        self.presumed = self.presumed and not self.refuted
         return not self.refuted
