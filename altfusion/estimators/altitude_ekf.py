@@ -54,6 +54,10 @@ Deviations from PX4 EKF2 (reasons in docs/altitude_ekf.md):
   horizon and an output predictor;
 * the height-reference fallback needs no switch: a lost source's offset state simply stops
   being observed and the remaining sources carry the height without a step;
+* a GNSS reference whose innovations' mean over 30 s shows it shifted, while a rangefinder
+  over a terrain known better agrees with the prediction, hands the datum over to the
+  terrain and gets its offset state (``gps_handover``,
+  :mod:`~altfusion.estimators.reference_handover`); EKF2 has no slow test of its reference;
 * the ground-effect dead zone applies within ``ground_effect_height`` of the terrain (or of
   the starting height), not on a land detector's flag; off by default;
 * each source's noise checked against its innovations (``adaptive_noise``, on by default):
@@ -104,6 +108,7 @@ from altfusion.estimators.kalman import (
 from altfusion.estimators.noise_check import WINDOW, NoiseCheck
 from altfusion.estimators.process_noise import MotionNoise, maximum_scale
 from altfusion.estimators.range_aid import RangeAid
+from altfusion.estimators.reference_handover import SPAN, ReferenceHandover
 from altfusion.estimators.streams import ACC, BARO_ALL, GPS_ALL, LASER, RADAR
 from altfusion.params import param
 
@@ -195,6 +200,11 @@ class AltitudeEKFParams(HealthParams):
                                        "√(gps_nsat_ref/N)", min=1)
     gate_sigma: float = param(5.0, "1", "Innovation gate of every source in standard "
                                         "deviations (PX4: 5; 0: off)", min=0.0)
+    gps_handover: bool = param(True, None, "A GNSS height reference whose innovations are "
+                                           "found shifted over 30 s, while a rangefinder "
+                                           "over a terrain known better agrees with the "
+                                           "prediction, hands the datum over to the "
+                                           "terrain and gets its offset state")
     height_ref: str = param("gps", None, "Height reference: gps (GNSS defines the datum, the "
                                          "baro gets offset and scale), baro (the baro defines "
                                          "it, GNSS gets the offset) or range (the terrain "
@@ -318,6 +328,11 @@ class AltitudeEKF(Estimator):
             if p.laser_min_range > 0.0 and p.gate_sigma > 0.0 else None
         """PX4's on-ground range (None without ``laser_min_range`` or a gate)."""
         self._laser_out = False           # an invalid laser frame arrived in this step
+        self.handover = ReferenceHandover() \
+            if p.gps_handover and p.height_ref == "gps" and p.fault_detection else None
+        """The GNSS reference's long test, for its hand-over to the terrain
+        (:mod:`~altfusion.estimators.reference_handover`; None: ``gps_handover`` off, not the
+        reference, handed over, or no fault layer)."""
         self._reference = p.height_ref if p.height_ref != "range" else None
         self._reference_rejected_since: float | None = None
         self._reference_sample = (0.0, 0.0, 1.0)       # its last rejected (z, stamp, σ)
@@ -477,7 +492,7 @@ class AltitudeEKF(Estimator):
         if aid is None or not self.started:
             return
         if aid.update(self.clock.now):
-            walk = 0.0 if self.params.height_ref == "range" else self.params.terrain_psd
+            walk = 0.0 if self._reference is None else self.params.terrain_psd
             self._q_rw[T] = 0.0 if aid.active else walk
             self.note(f"range aid {'started: the terrain held' if aid.active else 'stopped'}")
         if aid.active:
@@ -589,7 +604,7 @@ class AltitudeEKF(Estimator):
 
     def _model(self, source: str, h_s: float, row_h) -> tuple[float, list[tuple[int, float]]]:
         """The predicted measurement of a height source and its Jacobian row."""
-        x, ref = self.x, self.params.height_ref
+        x, ref = self.x, self._reference
         if source in ("radar", "laser"):
             return h_s - x[T], [*row_h, (T, -1.0)]
         if source == "baro" and ref != "baro":
@@ -643,13 +658,16 @@ class AltitudeEKF(Estimator):
         elif self._reference_first(y, S):
             self._fuse_height(source, z, stamp, sigma)     # sets its offset anew
             return
-        if self._gate_checked(source, y, S, R, slow_S):
+        fused = self._gate_checked(source, y, S, R, slow_S)
+        if fused:
             self._range_rejected_since.pop(source, None)
             if source == self._reference:
                 self._reference_rejected_since = None
             self.x, self.P, _ = update_scalar(self.x, self.P, row, y, R + slow_R)
             if source == self._reference:
                 self._reference_information += information(R + slow_R)
+        if self.handover is not None and source != "baro":
+            self._judge_reference(source, y, S, fused)
         if source == self._reference:
             self._datum_follows_noise()
 
@@ -695,7 +713,7 @@ class AltitudeEKF(Estimator):
             return False
         self._range_rejected_since.pop(source)
         self.x[T] -= y
-        if p.height_ref == "range":
+        if self._reference is None:                     # the terrain is the datum
             decorrelate(self.P, T, 0.0)
         else:
             rederive(self.P, T, row_h, R)
@@ -747,6 +765,52 @@ class AltitudeEKF(Estimator):
         self._reset_to_reference(y_ref, S_ref)
         return True
 
+    def _judge_reference(self, source: str, y: float, S: float, fused: bool) -> None:
+        """The GNSS reference's long test (:mod:`~altfusion.estimators.reference_handover`)
+        told the gated sample of ``source`` (the GNSS or a rangefinder); at a fused GNSS
+        sample, the datum handed over if the test finds the GNSS shifted."""
+        handover = self.handover
+        handover.gated(source, self.time, y, S, fused)
+        if source != "gps" or not fused:
+            return
+        heights = {name: self.aid[name].last_fused for name, _ in RANGEFINDERS}
+        rangefinder = handover.shifted(self.time, heights, self.params.reset_timeout,
+                                       self.P[T][T])
+        if rangefinder is not None:
+            self._hand_over(rangefinder, handover.reference.mean())
+
+    def _hand_over(self, rangefinder: str, shift: float) -> None:
+        """The GNSS, the height reference, found ``shift`` m off over the long test's span
+        while ``rangefinder`` over the terrain agrees with the prediction: the terrain
+        becomes the datum (frozen, as with ``height_ref`` range) and the GNSS gets its
+        offset g, at ``shift`` with the offsets' prior variance ``P0_offset`` and its random
+        walk ``gps_bias_psd``; its bias window and noise-check pair start anew. What its
+        samples taught the height is withdrawn: their share of 1/Var h
+        (:meth:`_datum_follows_noise`'s I) leaves the height, along with the offsets of the
+        other sources (so that their predictions stay), at most ``shift``² more uncertain
+        (the most the GNSS can have moved it). Once: the handover is dropped."""
+        p, P = self.params, self.P
+        self.note(f"gps: its innovations {shift:.3g} m off over {SPAN:g} s while the "
+                  f"{rangefinder} agrees: the datum handed over to the terrain, the GNSS "
+                  f"given its offset")
+        variance = P[H][H]
+        if variance > 0.0:
+            remaining = 1.0 / variance - min(self._reference_information, 1.0 / variance)
+            grown = min(1.0 / remaining if remaining > 0.0 else math.inf,
+                        variance + shift * shift)
+            direction = self._datum_direction()
+            direction[T] = direction[G] = 0.0
+            inflate_along(P, direction, grown - variance)
+        self.x[G] = shift
+        decorrelate(P, G, p.P0_offset)
+        self._q_rw[G], self._q_rw[T] = p.gps_bias_psd, 0.0
+        self._offset_known["gps"] = True
+        self._reference = self.handover = self._reference_rejected_since = None
+        self._datum_variance = 0.0
+        self.aid["gps"].window.clear()
+        if "gps" in self.noise_checks:
+            self.noise_checks["gps"].forget()
+
     def _reset_to_reference(self, y: float, S: float) -> None:
         self._reference_rejected_since = None
         self.height_reset(self.aid[self._reference], y, S, f"the height reference rejected for "
@@ -781,7 +845,7 @@ class AltitudeEKF(Estimator):
         z = h + g (GNSS), z = h - t (rangefinders); None for the height reference."""
         if source in ("radar", "laser"):
             return T
-        if source == self.params.height_ref:
+        if source == self._reference:
             return None
         return D if source == "baro" else G
 
@@ -792,7 +856,7 @@ class AltitudeEKF(Estimator):
         offset = self._offset_index(source)
         x[H] = z
         P[H][H] = R
-        if offset == T and self.params.height_ref == "range":
+        if offset == T and self._reference is None:
             P[T][T] = 0.0                                 # the terrain is the datum
         if offset is not None:
             sign = -1.0 if offset == T else 1.0           # z = h + sign·offset
@@ -840,7 +904,7 @@ class AltitudeEKF(Estimator):
         sigmas = self.params.gate_sigma
         y = value - self.x[index]                         # against the state's prior
         consistent = y * y <= sigmas * sigmas * (self.P[index][index] + self.P[H][H] + R)
-        frozen = index == T and self.params.height_ref == "range"
+        frozen = index == T and self._reference is None
         if consistent and not frozen:
             return False                                  # fused as any sample
         if index == T and not (consistent or frozen) \
@@ -869,17 +933,21 @@ class AltitudeEKF(Estimator):
         states keep their errors relative to it (:func:`~altfusion.estimators.kalman.
         move_datum`); the sample is consumed. One that agrees is fused as any sample, and so
         is one over a terrain told that a rangefinder has tied the height to (the terrain's
-        prior known better than the height and the sample, as in :meth:`_first_sample`):
-        the told terrain is in the reference's datum, so the height is known in it already.
-        (Else, with the vehicle presumed on the ground, the GNSS's first sample of the fault
-        flight told x0.2, 30 m off against a told 6 m, moved the datum and the told terrain
-        with it: the height 1-3.6 m off for the flight, RMS 2.1 m against 0.83 m.) True if
-        consumed."""
+        prior known better than the height and than the reference's stated or typical
+        noise, as in :meth:`_first_sample`; not than R, which a noise not stated starts
+        100-fold above): the told terrain is in the reference's datum, so the height is
+        known in it already. (Else, with the vehicle presumed on the ground, the GNSS's
+        first sample of the fault flight told x0.2, 30 m off against a told 6 m, moved the
+        datum and the told terrain with it: the height 1-3.6 m off for the flight, RMS 2.1 m
+        against 0.83 m. Against R, the Auterion log told nothing, started on its lidar over
+        the default terrain prior of 10 m, kept that datum and rejected its GNSS, 423 m
+        off, 179 times.) True if consumed."""
         h_s, _, row_h, _ = self._back(self.time)
         predicted, row = self._model(self._reference, h_s, row_h)
         y = z - predicted
         S = quadratic_form(self.P, row) + R
-        told = self._terrain_known and self.P[T][T] < min(self.P[H][H], R)
+        told = self._terrain_known and self.P[T][T] < min(
+            self.P[H][H], self.sensor_noise[self._reference] ** 2)
         if told or y * y <= self.params.gate_sigma**2 * S:
             return False
         direction = self._datum_direction()
@@ -956,6 +1024,8 @@ class AltitudeEKF(Estimator):
         the height; bounded above by its full variance instead."""
         slow = self._slow_variance()
         self.aid["gps"].window.shared = slow
+        if self.handover is not None:
+            self.handover.reference.shared = slow
         self._datum_variance = slow if self._reference == "gps" and self._reference_seen \
             else 0.0
 

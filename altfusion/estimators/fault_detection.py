@@ -30,7 +30,7 @@ The history of these choices (which fault-suite runs each one fixed) is in
 import math
 from collections.abc import Iterable
 
-from altfusion.estimators.aid_source import AidSource
+from altfusion.estimators.aid_source import AidSource, InnovationWindow
 
 BIAS_MIN_SAMPLES = 5
 """Fewest samples in a source's window before its bias test can reject it."""
@@ -84,23 +84,22 @@ def bias_test(source: AidSource, heights: Iterable[AidSource], now: float, timeo
         level = READMIT_SIGMAS if source.biased else threshold
         biased = abs(mean) > level * spread and any(
             other is not source and now - other.last_fused <= timeout
-            and agrees(other, level, mean, spread) for other in heights)
+            and agrees(other.window, level, mean, spread) for other in heights)
     source.biased = biased
     return biased
 
 
-def agrees(other: AidSource, sigmas: float, mean: float, spread: float) -> bool:
-    """True if height source ``other``'s innovation mean lies closer to the prediction
-    than ``mean`` (spread ``spread``), each in its own standard deviations, and more than
-    ``sigmas`` combined standard deviations from ``mean``: of two sources that disagree,
-    the one further from the prediction is off. A source never gated (an empty window)
-    counts as agreeing, with mean 0 known exactly.
+def agrees(window: InnovationWindow, sigmas: float, mean: float, spread: float) -> bool:
+    """True if another height source's innovation mean, over its ``window``, lies closer to
+    the prediction than ``mean`` (spread ``spread``), each in its own standard deviations,
+    and more than ``sigmas`` combined standard deviations from ``mean``: of two sources
+    that disagree, the one further from the prediction is off. A source never gated (an
+    empty window) counts as agreeing, with mean 0 known exactly.
 
     The other's mean need not pass the bias test itself: a prediction that is off too
     (BaoDriftEstimator holds the last accepted baro sample, 20 m noise and all) moves
     the means of both sources, and a GNSS 28 m from it (4.7 of its standard deviations)
     still tells a baro 130 m from it (31) to be the failed one."""
-    window = other.window
     if window.n == 0:
         return abs(mean) > sigmas * spread
     other_mean, other_variance = window.mean(), window.mean_variance()
