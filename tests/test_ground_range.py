@@ -90,7 +90,7 @@ SITE = {key: TOLD[key] for key in ("terrain_h", "P0_terrain", "terrain_psd")}
 """Told nothing but the site: every noise measured from its typical value."""
 
 
-def first_second(seed: int, h: float, **params) -> tuple[int | None, np.ndarray]:
+def standing_at(seed: int, h: float, **params) -> tuple[int | None, np.ndarray]:
     """10 s standing at ``h`` with every laser frame invalid: the step of the first laser
     fusion (None: never) and (error, h_std, status) per step."""
     ekf = AltitudeEKF(AltitudeEKF.Params(**params), step_size=STEP)
@@ -110,10 +110,10 @@ def test_told_nothing_the_ground_is_presumed_and_read_from_the_start():
     0.1 s and the height within 0.5 m over 0.3-2 s, against beyond 1 m without the
     presumption. Seeds 1-8."""
     for seed in range(1, 9):
-        first, rows = first_second(seed, 0.0, **SITE)
+        first, rows = standing_at(seed, 0.0, **SITE)
         assert first is not None and first <= 10
         assert np.abs(rows[30:200, 0]).max() < 0.5
-        first, rows = first_second(seed, 0.0, **SITE, starts_on_ground=False)
+        first, rows = standing_at(seed, 0.0, **SITE, starts_on_ground=False)
         assert first is not None and first > 100
         assert np.abs(rows[30:200, 0]).max() > 1.0
 
@@ -127,7 +127,7 @@ def test_an_airborne_start_beyond_the_reach_is_not_read_as_the_ground():
     for h in (26.0, 40.0):
         for told in (TOLD, SITE):
             for seed in range(1, 5):
-                first, rows = first_second(seed, h, **told)
+                first, rows = standing_at(seed, h, **told)
                 assert first is None
                 assert np.abs(rows[-100:, 0]).max() < 2.0
 

@@ -666,7 +666,7 @@ class AltitudeEKF(Estimator):
             self.x, self.P, _ = update_scalar(self.x, self.P, row, y, R + slow_R)
             if source == self._reference:
                 self._reference_information += information(R + slow_R)
-        if self.handover is not None and source != "baro":
+        if self.handover is not None:
             self._judge_reference(source, y, S, fused)
         if source == self._reference:
             self._datum_follows_noise()
@@ -767,14 +767,14 @@ class AltitudeEKF(Estimator):
 
     def _judge_reference(self, source: str, y: float, S: float, fused: bool) -> None:
         """The GNSS reference's long test (:mod:`~altfusion.estimators.reference_handover`)
-        told the gated sample of ``source`` (the GNSS or a rangefinder); at a fused GNSS
-        sample, the datum handed over if the test finds the GNSS shifted."""
+        told the gated sample of ``source`` (it keeps the GNSS's and the rangefinders'); at
+        a fused GNSS sample, the datum handed over if the test finds the GNSS shifted."""
         handover = self.handover
         handover.gated(source, self.time, y, S, fused)
         if source != "gps" or not fused:
             return
-        heights = {name: self.aid[name].last_fused for name, _ in RANGEFINDERS}
-        rangefinder = handover.shifted(self.time, heights, self.params.reset_timeout,
+        last_fused = {name: self.aid[name].last_fused for name, _ in RANGEFINDERS}
+        rangefinder = handover.shifted(self.time, last_fused, self.params.reset_timeout,
                                        self.P[T][T])
         if rangefinder is not None:
             self._hand_over(rangefinder, handover.reference.mean())
@@ -793,14 +793,9 @@ class AltitudeEKF(Estimator):
         self.note(f"gps: its innovations {shift:.3g} m off over {SPAN:g} s while the "
                   f"{rangefinder} agrees: the datum handed over to the terrain, the GNSS "
                   f"given its offset")
-        variance = P[H][H]
-        if variance > 0.0:
-            remaining = 1.0 / variance - min(self._reference_information, 1.0 / variance)
-            grown = min(1.0 / remaining if remaining > 0.0 else math.inf,
-                        variance + shift * shift)
-            direction = self._datum_direction()
-            direction[T] = direction[G] = 0.0
-            inflate_along(P, direction, grown - variance)
+        direction = self._datum_direction()
+        direction[T] = direction[G] = 0.0
+        self._withdraw_reference_share(math.inf, direction, P[H][H] + shift * shift)
         self.x[G] = shift
         decorrelate(P, G, p.P0_offset)
         self._q_rw[G], self._q_rw[T] = p.gps_bias_psd, 0.0
@@ -908,7 +903,7 @@ class AltitudeEKF(Estimator):
         if consistent and not frozen:
             return False                                  # fused as any sample
         if index == T and not (consistent or frozen) \
-                and self.P[T][T] < min(self.P[H][H], R):  # a terrain told: h onto z + t
+                and self._terrain_told(R):                # h onto z + t
             self.reset_height(source, -y, self.P[T][T] + R)
             self.note(f"{source}: first sample {-y:.4g} m from the height over the terrain "
                       f"told: height moved onto it")
@@ -922,6 +917,12 @@ class AltitudeEKF(Estimator):
         self.P[index][index] = 0.0 if frozen else self.P[H][H] + R
         self.accept(self.aid[source])
         return True
+
+    def _terrain_told(self, noise_variance: float) -> bool:
+        """Whether the terrain's prior is known better than the height and than a sample of
+        that ``noise_variance``: a disagreement between them is the height's (or the
+        sample's), not the terrain's (:meth:`_first_sample`, :meth:`_first_reference`)."""
+        return self.P[T][T] < min(self.P[H][H], noise_variance)
 
     def _first_reference(self, z: float, R: float) -> bool:
         """The reference's first sample (of variance R) after a start from another source sets
@@ -946,8 +947,7 @@ class AltitudeEKF(Estimator):
         predicted, row = self._model(self._reference, h_s, row_h)
         y = z - predicted
         S = quadratic_form(self.P, row) + R
-        told = self._terrain_known and self.P[T][T] < min(
-            self.P[H][H], self.sensor_noise[self._reference] ** 2)
+        told = self._terrain_known and self._terrain_told(self.sensor_noise[self._reference] ** 2)
         if told or y * y <= self.params.gate_sigma**2 * S:
             return False
         direction = self._datum_direction()
@@ -983,21 +983,34 @@ class AltitudeEKF(Estimator):
         its samples taught the datum is that much less certain. Of the datum's information
         1/Var h, the share I its samples gave (Σ 1/R since the datum was set, at most
         1/Var h) falls to I/r, the rest (the offsets' priors: a calibrated baro, a terrain
-        told) stays: Var h ← 1/(1/Var h - I·(1 - 1/r)) along the datum direction
-        (:func:`~altfusion.estimators.kalman.inflate_along`), every difference the other
-        sources see unchanged. (A noise stated x0.2 or not stated would otherwise leave the
-        first samples' average, weighted as precise, with an ``h_std`` of the stated noise
-        for minutes.) The whole Var h times r, right only where the reference alone placed
-        the datum, took the priors' share for the reference's: a GNSS not stated, its first
-        pair's bound 30x its start, lifted xu2016_hover15's ``h_std`` from the baro
-        offset's 10 m to 52 m (docs/altitude_ekf.md has the figures)."""
+        told) stays (:meth:`_withdraw_reference_share`), along the datum direction: every
+        difference the other sources see unchanged. (A noise stated x0.2 or not stated
+        would otherwise leave the first samples' average, weighted as precise, with an
+        ``h_std`` of the stated noise for minutes.) The whole Var h times r, right only where
+        the reference alone placed the datum, took the priors' share for the reference's: a
+        GNSS not stated, its first pair's bound 30x its start, lifted xu2016_hover15's
+        ``h_std`` from the baro offset's 10 m to 52 m (docs/altitude_ekf.md has the
+        figures)."""
         check = self.noise_checks.get(self._reference)
+        if check is not None and check.rise > 1.0:
+            self._withdraw_reference_share(check.rise, self._datum_direction())
+
+    def _withdraw_reference_share(self, rise: float, direction: list[float],
+                                  limit: float = math.inf) -> None:
+        """What the reference's samples taught the height made ``rise`` times less certain
+        (r ≥ 1; infinite: withdrawn): of 1/Var h their share I (Σ 1/R since the datum was
+        set, at most 1/Var h) falls to I/r, Var h ← 1/(1/Var h - I·(1 - 1/r)), at most
+        ``limit``, added along ``direction``
+        (:func:`~altfusion.estimators.kalman.inflate_along`). For a rise of the reference's
+        noise (:meth:`_datum_follows_noise`) and its hand-over (:meth:`_hand_over`)."""
         variance = self.P[H][H]
-        if check is not None and check.rise > 1.0 and variance > 0.0:
-            shown = min(self._reference_information, 1.0 / variance)
-            grown = 1.0 / (1.0 / variance - shown * (1.0 - 1.0 / check.rise))
-            inflate_along(self.P, self._datum_direction(), grown - variance)
-            self._reference_information = shown / check.rise
+        if variance <= 0.0:
+            return
+        shown = min(self._reference_information, 1.0 / variance)
+        remaining = 1.0 / variance - shown * (1.0 - 1.0 / rise)
+        grown = min(1.0 / remaining if remaining > 0.0 else math.inf, limit)
+        inflate_along(self.P, direction, grown - variance)
+        self._reference_information = shown / rise
 
     def _slow_error(self) -> None:
         """After each GNSS height sample, the variance of the GNSS's slow error

@@ -57,19 +57,24 @@ RANGEFINDERS = ("radar", "laser")
 class ReferenceHandover:
     """The long innovation windows of the GNSS reference and of the rangefinders."""
 
-    __slots__ = ("reference", "ranges")
+    __slots__ = ("windows",)
 
     def __init__(self) -> None:
-        self.reference = InnovationWindow()
-        """The GNSS reference's innovations over :data:`SPAN`."""
-        self.ranges = {name: InnovationWindow() for name in RANGEFINDERS}
-        """Each rangefinder's."""
+        self.windows = {name: InnovationWindow() for name in ("gps", *RANGEFINDERS)}
+        """The innovations over :data:`SPAN` of the GNSS reference and of each rangefinder."""
+
+    @property
+    def reference(self) -> InnovationWindow:
+        """The GNSS reference's window."""
+        return self.windows["gps"]
 
     def gated(self, source: str, now: float, innovation: float, variance: float,
               fused: bool) -> None:
-        """A sample of the reference (``gps``) or of a rangefinder was gated: a fused one
-        enters its window, a rejected one empties it."""
-        window = self.reference if source == "gps" else self.ranges[source]
+        """A sample of ``source`` was gated: if it is the reference's or a rangefinder's, a
+        fused one enters its window, a rejected one empties it."""
+        window = self.windows.get(source)
+        if window is None:
+            return
         if fused:
             window.add(now, innovation, variance, SPAN)
         else:
@@ -86,7 +91,7 @@ class ReferenceHandover:
         if abs(mean) <= BIAS_SIGMAS * spread:
             return None
         for name in RANGEFINDERS:
-            other = self.ranges[name]
+            other = self.windows[name]
             if other.n >= BIAS_MIN_SAMPLES and now - last_fused[name] <= timeout \
                     and terrain_variance < other.mean_variance() \
                     and agrees(other, BIAS_SIGMAS, mean, spread):
