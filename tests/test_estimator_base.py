@@ -209,7 +209,7 @@ def test_an_isolated_source_with_an_offset_state_is_re_admitted_with_its_new_off
     isolated = [s & source_bit("baro", SourceBit.ISOLATED) != 0 for s in statuses]
     assert any(isolated[:100]) and not isolated[-1]
     assert statuses[-1] & source_bit("baro", SourceBit.FUSED)
-    assert abs(estimator.bias - 200.0) <= 3.0 * math.sqrt(estimator.P[2, 2])
+    assert abs(estimator.bias - 200.0) <= 3.0 * math.sqrt(estimator.P[2][2])
     assert abs(estimator.h_est - 100.0) <= 3.0 * estimator.h_std
     statuses, estimator = _hover_with_a_step("gps", 200.0)
     isolated = [s & source_bit("gps", SourceBit.ISOLATED) != 0 for s in statuses]

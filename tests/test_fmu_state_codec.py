@@ -35,9 +35,12 @@ def baseline_state() -> dict:
 
 @pytest.mark.parametrize("edit, named", [
     (lambda s: setattr(s["core"], "h_est", "x"), "state['core'].h_est is a str"),
-    (lambda s: setattr(s["core"], "P", s["core"].P[:1]), "state['core'].P is an array"),
-    (lambda s: setattr(s["core"], "x", s["core"].x.astype(complex)),
-     "state['core'].x is an array of complex128"),
+    (lambda s: setattr(s["core"], "P", s["core"].P[:1]),
+     "state['core'].P is not a 3 x 3 matrix"),
+    (lambda s: setattr(s["core"], "P", [row[:1] for row in s["core"].P]),
+     "state['core'].P is not a 3 x 3 matrix"),
+    (lambda s: setattr(s["core"], "x", [complex(v) for v in s["core"].x]),
+     "state['core'].x[0] is a complex"),
     (lambda s: setattr(s["core"], "started", 1.0), "state['core'].started is a float"),
     (lambda s: delattr(s["core"], "bias"), "lacks ['bias']"),
     (lambda s: s.update(step_size="0.01"), "state['step_size'] is a str"),

@@ -23,10 +23,15 @@ Deviations from the papers' "normal Kalman filter" (which none of them specifies
 import math
 from dataclasses import dataclass
 
-import numpy as np
-
 from altfusion.estimators.base import Estimator, HealthParams, Verdict
-from altfusion.estimators.kalman import dense_row, measurement_prior, predict, shift_state, update
+from altfusion.estimators.kalman import (
+    diagonal,
+    predict_sparse,
+    quadratic_form,
+    shift_state,
+    sparse_dot,
+    update_scalar,
+)
 from altfusion.estimators.streams import BARO, GPS, Stream
 from altfusion.params import param
 
@@ -65,20 +70,21 @@ class BaselineKF(Estimator):
     stated_aliases = {"baro_bias_psd": "bias_psd"}
 
     def configure(self, clock) -> None:
-        """F and Q of one step of the estimator (white acceleration on h and v, a random walk
-        on the bias), built once: ``propagate`` is always called with this step."""
+        """F (as sparse rows) and Q of one step of the estimator (white acceleration on h and
+        v, a random walk on the bias), built once: ``propagate`` is always called with this
+        step."""
         p, dt = self.params, clock.step_size
-        self._F = np.array([[1.0, dt, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
-        self._Q = np.array([
-            [p.accel_psd * dt**3 / 3.0, p.accel_psd * dt**2 / 2.0, 0.0],
-            [p.accel_psd * dt**2 / 2.0, p.accel_psd * dt, 0.0],
-            [0.0, 0.0, p.bias_psd * dt],
-        ])
+        self._F = (((0, 1.0), (1, dt)), ((1, 1.0),), ((2, 1.0),))
+        self._Q = (
+            (p.accel_psd * dt**3 / 3.0, p.accel_psd * dt**2 / 2.0, 0.0),
+            (p.accel_psd * dt**2 / 2.0, p.accel_psd * dt, 0.0),
+            (0.0, 0.0, p.bias_psd * dt),
+        )
 
     def initialize_filter(self) -> None:
         p = self.params
-        self.x = np.zeros(N)
-        self.P = np.diag([p.P0_h, p.P0_vz, p.P0_b])
+        self.x = [0.0] * N
+        self.P = diagonal((p.P0_h, p.P0_vz, p.P0_b))
         self.bias = 0.0
         self.innovation = 0.0
         self._publish()
@@ -86,7 +92,7 @@ class BaselineKF(Estimator):
     def propagate(self, dt: float) -> None:
         if not self.started:
             return
-        self.x, self.P = predict(self.x, self.P, self._F, self._Q)
+        self.x, self.P = predict_sparse(self.x, self.P, self._F, self._Q)
         self._publish()
 
     def fuse(self, stream: Stream, sample: dict[str, float]) -> None:
@@ -101,15 +107,14 @@ class BaselineKF(Estimator):
             self.accept(self.aid[stream.prefix])
             self._publish()
             return
-        predicted, hph = measurement_prior(self.x, self.P, H)
-        innovation, variance = z - predicted, hph + R
+        innovation = z - sparse_dot(self.x, H)
+        variance = quadratic_form(self.P, H) + R
         verdict = self.gate(self.aid[stream.prefix], innovation, variance, p.gate_sigma)
         if verdict is not Verdict.FUSED:
             self._publish()
             return
-        result = update(self.x, self.P, z, dense_row(H, N), R)
-        self.x, self.P = result.x, result.P
-        self.innovation = float(result.innovation[0])
+        self.x, self.P, _ = update_scalar(self.x, self.P, H, innovation, R)
+        self.innovation = innovation
         self._publish()
 
     def reset_height(self, source: str, innovation: float, variance: float) -> None:
@@ -123,5 +128,5 @@ class BaselineKF(Estimator):
         return True
 
     def _publish(self) -> None:
-        self.h_est, self.vz_est, self.bias = self.x.tolist()
-        self.h_std = math.sqrt(self.P.item(0, 0))
+        self.h_est, self.vz_est, self.bias = self.x
+        self.h_std = math.sqrt(self.P[0][0])

@@ -6,11 +6,15 @@ All arrays are float numpy arrays; a scalar measurement has H of shape (1, n) an
 Products are ``ndarray.dot``: the same BLAS call as ``@`` (the same floats), without the
 generalized-ufunc dispatch that dominates the cost of a product of 3x3 matrices.
 
-For small filters stepped at high rates the same equations exist in scalar arithmetic on
-Python floats (vectors are sequences of floats, matrices sequences of rows): a numpy
-operation on a 3x3 array costs ~0.5 µs whatever it computes, a float operation ~0.03 µs.
-They agree with the numpy forms to rounding (tests/test_kalman.py) but not bit for bit: BLAS
-sums and fuses its products in its own order.
+The estimators step on the same equations in scalar arithmetic on Python floats (vectors
+are sequences of floats, matrices sequences of rows), and never on the array forms, which
+are the textbook reference the scalar forms are tested against (tests/test_kalman.py: equal
+to rounding). Two reasons: a numpy operation on a 3x3 array costs ~0.5 µs whatever it
+computes, a float operation ~0.03 µs; and BLAS sums and fuses its products in an order of
+its own that depends on the processor (OpenBLAS picks its kernel at run time: with fused
+multiply-adds on Haswell and later, without on Sandy Bridge), so that an estimator stepped
+on arrays gives other bits on another machine. Python's float operations are IEEE 754's,
+rounded once each, on every machine.
 """
 # ruff: noqa: B905  (the scalar forms zip sequences of equal lengths by construction; a
 # zip(..., strict=...) is a keyword call, which costs more than a short row's arithmetic)
@@ -112,6 +116,12 @@ def scalar_gate(innovation: float, variance: float, sigmas: float) -> bool:
 # ----------------------------------------------------------------- scalar arithmetic
 Vector = Sequence[float]
 Matrix = Sequence[Sequence[float]]
+
+
+def diagonal(variances: Sequence[float]) -> list[list[float]]:
+    """The diagonal matrix of ``variances``, as rows (a covariance of independent errors)."""
+    n = len(variances)
+    return [[variance if i == j else 0.0 for j in range(n)] for i, variance in enumerate(variances)]
 
 
 # ------------------------------------------- the same floats, without the arrays
@@ -283,17 +293,20 @@ def move_datum(P, index: int, direction: Sequence[float], variance: float) -> No
             P_a[b] = P_a[b] - (u_a * row[b] + u_b * row[a]) + u_a * u_b * base
 
 
-def limit_variance(P: np.ndarray, index: int, maximum: float) -> None:
+def limit_variance(P: list[list[float]], index: int, maximum: float) -> None:
     """In place: the variance of state ``index`` held at most ``maximum``, by scaling its row
     and column of P by √(maximum/P_ii) (P ← D P D, D = I but that factor at ``index``: P
     stays positive semi-definite and every correlation coefficient as it was). PX4 EKF2
     bounds its state variances the same way in ``constrainStateVariances`` (the
     accelerometer bias's at 1 (m/s²)², there by fusing a zero innovation)."""
-    variance = P[index, index]
+    variance = P[index][index]
     if variance > maximum:
         scale = math.sqrt(maximum / variance)
-        P[index, :] *= scale
-        P[:, index] *= scale
+        P_index = P[index]
+        for j in range(len(P_index)):
+            P_index[j] *= scale
+        for P_a in P:
+            P_a[index] *= scale
 
 
 def inflate_along(P, direction: Sequence[float], variance: float) -> None:
@@ -341,20 +354,46 @@ def quadratic_form(P: Matrix, H: Sequence[tuple[int, float]]) -> float:
     return total
 
 
+def predict_sparse(x: Vector, P: Matrix, F: Sequence[Sequence[tuple[int, float]]], Q: Matrix,
+                   Bu: Vector | None = None) -> tuple[list[float], list[list[float]]]:
+    """:func:`predict` for a transition matrix F given as sparse rows (each a tuple of
+    (state index, coefficient) pairs), in scalar arithmetic: x⁻ = F x + B u, P⁻ = F P Fᵀ + Q
+    (``Bu``: B u, or None for none).
+
+    Row a of F P is P Fₐᵀ (P symmetric), each entry of F P Fᵀ a sparse sum of that row:
+    the work grows with F's non-zero entries, not with n³. The upper triangle is computed and
+    mirrored, so that P⁻ is exactly symmetric (P and Q must be symmetric)."""
+    FP = [_times_row(P, F_a) for F_a in F]
+    n = len(F)
+    P_new = [[0.0] * n for _ in range(n)]
+    for a, FP_a in enumerate(FP):
+        P_a, Q_a = P_new[a], Q[a]
+        for b in range(a, n):
+            P_a[b] = P_new[b][a] = sparse_dot(FP_a, F[b]) + Q_a[b]
+    x_new = [sparse_dot(x, F_a) for F_a in F]
+    return (x_new if Bu is None else list(map(add, x_new, Bu))), P_new
+
+
 def update_scalar(x: Vector, P: Matrix, H: Sequence[tuple[int, float]], innovation: float,
-                  variance: float) -> tuple[list[float], list[list[float]], float]:
+                  variance: float, gain_scale: float = 1.0,
+                  ) -> tuple[list[float], list[list[float]], float]:
     """:func:`update` for one scalar measurement whose Jacobian row H is sparse (given as
     (state index, coefficient) pairs), in scalar arithmetic; ``innovation`` y = z - h(x⁻) is
     computed by the caller (an extended Kalman filter's nonlinear h); returns x, P and the
     innovation variance S.
 
-        r = P⁻ Hᵀ,  S = H r + R,  K = r / S,  x = x⁻ + K y
+        r = P⁻ Hᵀ,  S = H r + R,  K = α r / S,  x = x⁻ + K y
         P = P⁻ - (K rᵀ + r Kᵀ) + S K Kᵀ            (Joseph form, as update_state_component)
 
-    P stays exactly symmetric (each entry's sum is the same float for (a, b) and (b, a))."""
+    The Joseph form (I - K H) P⁻ (I - K H)ᵀ + K R Kᵀ expands to the second line for any K,
+    so it stays exact for a gain scaled by a weight α = ``gain_scale`` (xu2016 eq. 26). P
+    stays exactly symmetric (each entry's sum is the same float for (a, b) and (b, a))."""
     row = _times_row(P, H)
     S = sparse_dot(row, H) + variance
-    K = list(map(truediv, row, repeat(S)))                         # r / S, without a frame
+    if gain_scale == 1.0:
+        K = list(map(truediv, row, repeat(S)))                     # r / S, without a frame
+    else:
+        K = list(map(mul, row, repeat(gain_scale / S)))
     return (*_gain_step(x, P, row, K, S, innovation), S)
 
 
@@ -412,26 +451,6 @@ def _times_row(P: Matrix, H: Sequence[tuple[int, float]]) -> list[float]:
         (i, h), (j, g), (k, f), (m, e) = H
         return [0.0 + h * P_a[i] + g * P_a[j] + f * P_a[k] + e * P_a[m] for P_a in P]
     return [sum(h * P_a[i] for i, h in H) for P_a in P]
-
-
-@cache
-def dense_row(H: Sequence[tuple[int, float]], n: int) -> np.ndarray:
-    """The sparse row H ((state index, coefficient) pairs, a tuple) as the (1, n) array of
-    :func:`update`, made once (read only: every use makes a new array from it)."""
-    row = np.zeros((1, n))
-    for i, h in H:
-        row[0, i] = h
-    row.flags.writeable = False
-    return row
-
-
-def measurement_prior(x: np.ndarray, P: np.ndarray, H: Sequence[tuple[int, float]],
-                      ) -> tuple[float, float]:
-    """H x and H P Hᵀ for a sparse row H of a filter held in arrays: the floats of
-    ``H @ x`` and ``H @ P @ H.T`` (P symmetric) where each of their sums has at most two
-    terms, all exact products (no fused multiply-add rounds otherwise), without the
-    arrays."""
-    return sparse_dot(x.tolist(), H), quadratic_form(P.tolist(), H)
 
 
 def sparse_dot(v: Vector, H: Sequence[tuple[int, float]]) -> float:

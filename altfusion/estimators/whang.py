@@ -65,16 +65,16 @@ of the class); ``docs/estimators.md`` gives the cases behind it:
   sample's R_h.
 """
 
+import math
 from dataclasses import dataclass
-
-import numpy as np
 
 from altfusion.constants import ISA_LAPSE_RATE, ISA_T0
 from altfusion.estimators.base import Estimator, HealthParams, Verdict
 from altfusion.estimators.kalman import (
     decorrelate,
+    diagonal,
     joseph_first_of_two,
-    predict,
+    predict_sparse,
     shift_state,
     update_first_of_two,
     update_one_state,
@@ -127,8 +127,8 @@ class WhangGAEstimator(Estimator):
         """F and Q of eq. (33) for one step of the estimator, built once: ``propagate`` is
         always called with this step."""
         p, dt = self.params, clock.step_size
-        self._F = np.array([[1.0, dt], [0.0, 1.0 - dt / p.tau]])                 # (33)
-        self._Q = np.array([[0.0, 0.0], [0.0, p.Q_h * (dt / p.adm_period)]])
+        self._F = (((0, 1.0), (1, dt)), ((1, 1.0 - dt / p.tau),))                # (33)
+        self._Q = ((0.0, 0.0), (0.0, p.Q_h * (dt / p.adm_period)))
 
     def initialize_filter(self) -> None:
         """The paper's initial state, then the fault layer's (its error covariance and its
@@ -136,8 +136,8 @@ class WhangGAEstimator(Estimator):
         p = self.params
         self.a, self.P_a = 0.0, p.P0_a
         self.b, self.P_b = 0.0, p.P0_b
-        self.x = np.array([p.H0, 0.0])
-        self.P = np.diag([p.P0_h, p.P0_vz])
+        self.x = [p.H0, 0.0]
+        self.P = diagonal((p.P0_h, p.P0_vz))
         self.P_error = self.P
         self._stamps: dict[str, float] = {}
         self._intervals: dict[str, float] = {}
@@ -175,8 +175,8 @@ class WhangGAEstimator(Estimator):
         self.P_a += p.Q_a * scale                                               # (17)
         self.P_b += p.Q_b * scale                                               # (18)
         if self.started:
-            self.x, self.P = predict(self.x, self.P, self._F, self._Q)          # (33)
-        self.h_prior = float(self.x[0])
+            self.x, self.P = predict_sparse(self.x, self.P, self._F, self._Q)   # (33)
+        self.h_prior = self.x[0]
 
     # -------------------------------------------------------------- measurements
     def _measurement_update(self, air_data, gps) -> None:
@@ -199,7 +199,7 @@ class WhangGAEstimator(Estimator):
         lever = self.h_prior - p.H0
         sign = 1.0 if p.paper_lambda_sign else -1.0
         self.lambda_meas = sign * (temperature - p.lapse_rate * lever - p.T0) / p.T0   # (6)
-        variance = (p.R_temperature + p.lapse_rate**2 * self.P.item(0, 0)
+        variance = (p.R_temperature + p.lapse_rate**2 * self.P[0][0]
                     + lever**2 * p.lapse_rate_var) / p.T0**2                        # (7)
         self.a, self.P_a, _ = update_one_state(self.a, self.P_a, self.lambda_meas,
                                                variance)                        # (20)-(22)
@@ -244,7 +244,7 @@ class WhangGAEstimator(Estimator):
         the start)."""
         self.h_comp, R_h = self._compensated(self.baro)
         if not self.started:
-            self.x = np.array([self.h_comp, 0.0])
+            self.x = [self.h_comp, 0.0]
             self.started = True
             return R_h, None
         return R_h, self._alpha_beta_update(self.h_comp, R_h)
@@ -252,15 +252,13 @@ class WhangGAEstimator(Estimator):
     def _alpha_beta_update(self, z: float, R: float) -> list[float]:
         """Eq. (34): the alpha-beta filter updated by the height z of variance R (H = [1, 0]);
         returns its gain K."""
-        x, P, K = update_first_of_two(self.x.tolist(), self.P.tolist(), z, R)
-        self.x, self.P = np.array(x), np.array(P)
+        self.x, self.P, K = update_first_of_two(self.x, self.P, z, R)
         return K
 
-    def _publish(self, P: np.ndarray) -> None:
+    def _publish(self, P: list[list[float]]) -> None:
         """The outputs, ``h_std`` from the covariance ``P``."""
-        self.h_est = float(self.x[0])
-        self.vz_est = float(self.x[1])
-        self.h_std = float(np.sqrt(P[0, 0]))
+        self.h_est, self.vz_est = self.x
+        self.h_std = math.sqrt(P[0][0])
         self.scale_factor, self.bias = self.a, self.b
         self.scale_factor_var, self.bias_var = self.P_a, self.P_b
 
@@ -269,7 +267,7 @@ class WhangGAEstimator(Estimator):
         """The paper's time update, and that of the error covariance of ``h_std``."""
         self._time_update(dt)
         if self.started:
-            self.P_error = predict(self.x, self.P_error, self._F, self._Q)[1]
+            self.P_error = predict_sparse(self.x, self.P_error, self._F, self._Q)[1]
 
     def _measurement_update_with_baro_gate(self, air_data, gps) -> None:
         """The paper's measurement updates with the baro height gated first: while it is
@@ -301,14 +299,14 @@ class WhangGAEstimator(Estimator):
             self.accept(self.aid["baro"])
             return True
         h_comp, R_h = self._compensated(h_baro)
-        return self.gate(self.aid["baro"], h_comp - self.h_prior, self.P_error[0, 0] + R_h,
+        return self.gate(self.aid["baro"], h_comp - self.h_prior, self.P_error[0][0] + R_h,
                          self.params.gate_sigma) is Verdict.FUSED
 
     def _gps_height_update(self, h_gps: float) -> None:
         """The GPS height fused into the alpha-beta filter (eq. 34 with R^GPS) while the baro
         is rejected: z = h^B - h^GPS has no valid h^B then."""
         R = self.params.R_gps
-        if self.gate(self.aid["gps"], h_gps - self.h_prior, self.P_error[0, 0] + R,
+        if self.gate(self.aid["gps"], h_gps - self.h_prior, self.P_error[0][0] + R,
                      self.params.gate_sigma) is Verdict.FUSED:
             self._error_update(self._alpha_beta_update(h_gps, R), R)
 
@@ -317,7 +315,7 @@ class WhangGAEstimator(Estimator):
         ``h_std``: from the first sample's R_h, then updated under R^B' + N·C."""
         R_h, gain = self._compensate()
         if gain is None:
-            self.P_error = np.diag([R_h, self.P[1, 1]])
+            self.P_error = diagonal((R_h, self.P[1][1]))
             return
         white = self.params.R_baro / (1.0 + self.a) ** 2
         shared = self._samples_per_calibration() * (R_h - white)
@@ -326,7 +324,7 @@ class WhangGAEstimator(Estimator):
     def _error_update(self, gain: list[float], R_error: float) -> None:
         """The error covariance of ``h_std`` after the alpha-beta update of gain ``gain``,
         under the variance ``R_error`` that the height's error truly has (Joseph form)."""
-        self.P_error = np.array(joseph_first_of_two(self.P_error.tolist(), gain, R_error))
+        self.P_error = joseph_first_of_two(self.P_error, gain, R_error)
 
     def _interval(self, name: str, stamp: float) -> None:
         """Record the interval between the last two samples of ``name`` (positive only)."""

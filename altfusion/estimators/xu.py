@@ -70,16 +70,16 @@ import math
 from collections import deque
 from dataclasses import dataclass, field
 
-import numpy as np
-
 from altfusion.estimators.base import Estimator, HealthParams, Verdict
 from altfusion.estimators.kalman import (
-    dense_row,
+    decorrelate,
+    diagonal,
     limit_variance,
-    measurement_prior,
-    predict,
+    predict_sparse,
+    quadratic_form,
     shift_state,
-    update,
+    sparse_dot,
+    update_scalar,
 )
 from altfusion.estimators.noise_check import WINDOW, NoiseCheck
 from altfusion.estimators.streams import ACC, BARO, GPS, LASER, Stream
@@ -96,7 +96,7 @@ ALTITUDE_ROW = ((0, 1.0),)
 """H of a height measurement (laser, GPS), as (state index, coefficient) pairs."""
 BARO_ROW = ((0, 1.0), (BARO_OFFSET, 1.0))
 """H of the barometer: h + ε_b (eq. 14)."""
-MOTION_STATES = np.array([True, True, True, False])
+MOTION_STATES = (True, True, True, False)
 """h, vz and the accelerometer bias: the states strong tracking always inflates."""
 MIN_VARIANCE = 1e-12
 """Floor of H P⁻ Hᵀ in the strong-tracking factor, m²."""
@@ -212,18 +212,18 @@ class XuSHAEKF(Estimator):
                                "10-11, 19: acc_z is the input u)"}
 
     def configure(self, clock) -> None:
-        """Φ, B and B·Bᵀ of eqs. (10)-(11) for one step of the estimator, built once:
-        ``propagate`` is always called with this step."""
+        """Φ (as sparse rows), B and B·Bᵀ of eqs. (10)-(11) for one step of the estimator,
+        built once: ``propagate`` is always called with this step."""
         dt = clock.step_size
-        self._Phi = np.array([[1.0, dt, -dt * dt / 2.0, 0.0], [0.0, 1.0, -dt, 0.0],
-                              [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
-        self._B = np.array([[dt * dt / 2.0], [dt], [0.0], [0.0]])
-        self._BBt = self._B @ self._B.T
+        self._Phi = (((0, 1.0), (1, dt), (2, -dt * dt / 2.0)), ((1, 1.0), (2, -dt)),
+                     ((2, 1.0),), ((3, 1.0),))
+        self._B = (dt * dt / 2.0, dt, 0.0, 0.0)
+        self._BBt = tuple(tuple(b_a * b_b for b_b in self._B) for b_a in self._B)
 
     def initialize_filter(self) -> None:
         p = self.params
-        self.x = np.zeros(N)
-        self.P = np.diag([p.R_baro, p.P0_vz, p.acc_bias_std**2, p.baro_bias_std**2])
+        self.x = [0.0] * N
+        self.P = diagonal((p.R_baro, p.P0_vz, p.acc_bias_std**2, p.baro_bias_std**2))
         self.u = 0.0
         self._acc_last: float | None = None
         self._acc_diffs: deque = deque(maxlen=p.acc_window)
@@ -251,10 +251,12 @@ class XuSHAEKF(Estimator):
         if not self.started:
             return
         p = self.params
-        Q = self._BBt * self.acc_noise_est**2
-        Q[2, 2] += p.acc_bias_psd * dt
-        Q[3, 3] += p.baro_bias_psd * dt
-        self.x, self.P = predict(self.x, self.P, self._Phi, Q, self._B, self.u)
+        variance = self.acc_noise_est**2
+        Q = [[b * variance for b in row] for row in self._BBt]
+        Q[2][2] += p.acc_bias_psd * dt
+        Q[3][3] += p.baro_bias_psd * dt
+        Bu = [b * self.u for b in self._B]
+        self.x, self.P = predict_sparse(self.x, self.P, self._Phi, Q, Bu)
         # published by fuse_samples, which ends every step
 
     # -------------------------------------------------------------- measurements
@@ -287,7 +289,7 @@ class XuSHAEKF(Estimator):
         """Eq. (14): laser below switch_h over the terrain, baro above, with hysteresis."""
         p = self.params
         laser_live = self.time - self._last_laser_time <= p.laser_timeout
-        above = float(self.x[0]) - p.terrain_h
+        above = self.x[0] - p.terrain_h
         if self.height_source == LASER_SOURCE:
             if not laser_live or (self.started and above > p.switch_h):
                 self.height_source = BARO_SOURCE
@@ -303,8 +305,8 @@ class XuSHAEKF(Estimator):
             self._start(z, H, channel.R_hat)
             self.accept(self.aid[name])
             return
-        predicted, hph = measurement_prior(self.x, self.P, H)
-        innovation = z - predicted                                              # (20)
+        innovation = z - sparse_dot(self.x, H)                                  # (20)
+        hph = quadratic_form(self.P, H)
         ratio = channel.innovation_ratio(innovation**2 / (hph + channel.R_nominal))  # (15)-(17)
         if p.adaptive:       # (18), α = min(1, (c/α_C)²) without dividing by α_C = 0
             channel.weight = 1.0 if ratio <= p.weight_c else (p.weight_c / ratio) ** 2
@@ -333,9 +335,8 @@ class XuSHAEKF(Estimator):
             R_k = self._nominal(name)
             if active and innovation**2 > p.gamma * (hph + R_k):                # (23)
                 self._strong_tracking(innovation**2, R_k, hph)                   # (24)
-        result = update(self.x, self.P, z, dense_row(H, N), channel.R_hat,
-                        gain_scale=channel.weight)                              # (25)-(27)
-        self.x, self.P = result.x, result.P
+        self.x, self.P, _ = update_scalar(self.x, self.P, H, innovation, channel.R_hat,
+                                          channel.weight)                       # (25)-(27)
 
     def _nominal(self, name: str) -> float:
         """R_k of height source ``name`` in the convergence test of eq. (23) and the factor λ
@@ -368,8 +369,10 @@ class XuSHAEKF(Estimator):
         the innovations stay large: told noises 40x too small (the defaults on a 20 m baro),
         it grew until one GNSS sample set b_a to hundreds of m/s² (docs/estimators.md)."""
         factor = min(MAX_FADING, max(1.0, (innovation_sq - R) / max(hph, MIN_VARIANCE)))
-        root = np.where(MOTION_STATES, math.sqrt(factor), 1.0)
-        self.P = self.P * np.outer(root, root)
+        root = math.sqrt(factor)
+        roots = [root if motion else 1.0 for motion in MOTION_STATES]
+        self.P = [[p_ab * (r_a * r_b) for p_ab, r_b in zip(P_a, roots, strict=True)]
+                  for P_a, r_a in zip(self.P, roots, strict=True)]
         limit_variance(self.P, ACC_BIAS, MAX_ACC_BIAS_VARIANCE)
         self.strong_tracking_factor = factor
         self.n_strong_tracking += 1
@@ -378,10 +381,9 @@ class XuSHAEKF(Estimator):
         """Start at the first height sample: h = z - (rest of H)·x, uncorrelated with vz."""
         b = BARO_OFFSET
         offset = dict(H).get(b, 0.0)                    # ε_b's coefficient in H
-        self.x[0] = z - float(offset * self.x[b])
-        self.P[0, :] = self.P[:, 0] = 0.0
-        self.P[0, 0] = R + offset**2 * self.P[b, b]
-        self.P[0, b] = self.P[b, 0] = -offset * self.P[b, b]
+        self.x[0] = z - offset * self.x[b]
+        decorrelate(self.P, 0, R + offset**2 * self.P[b][b])
+        self.P[0][b] = self.P[b][0] = -offset * self.P[b][b]
         self.started = True
 
     def checks_own_noise(self) -> bool:
@@ -405,8 +407,8 @@ class XuSHAEKF(Estimator):
         return True
 
     def _publish(self) -> None:
-        self.h_est, self.vz_est, self.acc_bias, self.baro_bias = self.x.tolist()
-        self.h_std = math.sqrt(self.P.item(0, 0))
+        self.h_est, self.vz_est, self.acc_bias, self.baro_bias = self.x
+        self.h_std = math.sqrt(self.P[0][0])
         self.weight_gps = self.channels["gps"].weight
         self.weight_baro = self.channels["baro"].weight
         self.weight_laser = self.channels["laser"].weight

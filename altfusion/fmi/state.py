@@ -185,6 +185,9 @@ class _Checker:
             return
         self._seen.add((id(new), id(current)))
         if isinstance(current, (list, tuple, collections.deque)):
+            if _is_matrix(current) and not (_is_matrix(new) and len(new) == len(current)):
+                raise StateError(f"{path} is not a {len(current)} x {len(current)} matrix "
+                                 f"as this instance's is: {_kind(new)}")
             for index, item in enumerate(new):
                 if len(current):
                     self.check(item, current[min(index, len(current) - 1)],
@@ -205,6 +208,16 @@ class _Checker:
                 type(new.bit_generator) is not type(current.bit_generator)):
             raise StateError(f"{path} draws from {type(new.bit_generator).__name__} where "
                              f"this instance has {type(current.bit_generator).__name__}")
+
+
+def _is_matrix(value: Any) -> bool:
+    """A non-empty list or tuple of as many rows of numbers (a covariance of the
+    estimators' scalar arithmetic): its shape is that of the estimator's state, part of its
+    type as an array's shape is (lists of numbers alone may change length: a sensor's buffer
+    of drawn noise)."""
+    return isinstance(value, (list, tuple)) and bool(value) and all(
+        isinstance(row, (list, tuple)) and len(row) == len(value)
+        and all(isinstance(v, (int, float)) for v in row) for row in value)
 
 
 def _is_data_object(value: Any) -> bool:
