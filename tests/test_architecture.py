@@ -145,3 +145,29 @@ def test_system_description_imports_no_fmi_library():
     completed = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                                timeout=120)
     assert completed.returncode == 0, completed.stderr
+
+
+NUMERICS_PACKAGES = ("physics", "sensors", "estimators")
+
+
+def builtin_sum_calls(source: str) -> list[int]:
+    """The lines of ``source`` that call the builtin ``sum``."""
+    return [node.lineno for node in ast.walk(ast.parse(source))
+            if isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
+            and node.func.id == "sum"]
+
+
+def test_the_numerics_never_sum_floats_with_the_builtin_sum():
+    """Python 3.12 changed ``sum`` of floats to a compensated summation, which gives other
+    bits than 3.11's additions one after the other: an estimator summing with it would give
+    other outputs on another Python (FMUs run in the host's). The numerics add with
+    ``kalman.running_sum`` (3.11's order, written out) or ``math.fsum`` (correctly rounded)."""
+    found = {str(path.relative_to(ROOT)): lines
+             for package in NUMERICS_PACKAGES
+             for path in sorted((ROOT / "altfusion" / package).rglob("*.py"))
+             if (lines := builtin_sum_calls(path.read_text()))}
+    assert found == {}
+
+
+def test_the_sum_check_finds_builtin_sum_calls():
+    assert builtin_sum_calls("x = sum(w)\ny = math.fsum(w)\nz = np.sum(w)\n") == [1]

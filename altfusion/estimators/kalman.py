@@ -20,7 +20,7 @@ rounded once each, on every machine.
 # zip(..., strict=...) is a keyword call, which costs more than a short row's arithmetic)
 
 import math
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from functools import cache
 from itertools import repeat
 from operator import add, mul, truediv
@@ -436,8 +436,8 @@ def _row_slices(n: int) -> tuple[slice, ...]:
 
 
 def _times_row(P: Matrix, H: Sequence[tuple[int, float]]) -> list[float]:
-    """P Hᵀ for a sparse row H: each entry the sum of H's terms from 0 in H's order (the
-    float :func:`sum` gives), written out for rows of up to four terms."""
+    """P Hᵀ for a sparse row H: each entry the sum of H's terms from 0 in H's order (as
+    :func:`sparse_dot`), written out for rows of up to four terms."""
     if len(H) == 1:
         (i, h), = H
         return [0.0 + h * P_a[i] for P_a in P]
@@ -450,12 +450,22 @@ def _times_row(P: Matrix, H: Sequence[tuple[int, float]]) -> list[float]:
     if len(H) == 4:
         (i, h), (j, g), (k, f), (m, e) = H
         return [0.0 + h * P_a[i] + g * P_a[j] + f * P_a[k] + e * P_a[m] for P_a in P]
-    return [sum(h * P_a[i] for i, h in H) for P_a in P]
+    return [sparse_dot(P_a, H) for P_a in P]
+
+
+def running_sum(values: Iterable[float]) -> float:
+    """The values added one after the other from 0.0: the float Python 3.11's ``sum`` gives,
+    on every Python (from 3.12 on, ``sum`` compensates its floats' rounding errors and gives
+    other bits). For a few terms; a long window takes ``math.fsum`` (correctly rounded)."""
+    total = 0.0
+    for value in values:
+        total += value
+    return total
 
 
 def sparse_dot(v: Vector, H: Sequence[tuple[int, float]]) -> float:
     """H v for a sparse row H ((state index, coefficient) pairs), summed from 0 in H's order
-    (the float :func:`sum` gives; :func:`_times_row` sums the same way)."""
+    (:func:`running_sum`'s order; :func:`_times_row` sums the same way)."""
     total = 0.0
     for i, h in H:
         total += h * v[i]

@@ -61,8 +61,8 @@ of the class); ``docs/estimators.md`` gives the cases behind it:
   air-data samples between two GPS samples (N = GPS interval / air-data interval, from the
   time stamps) share one calibration error, which the filter would average down as if
   independent. ``h_std`` is the error covariance of the filter's own gain K under the
-  equivalent white noise of that shared error, R^B' + N·C (``kalman.joseph``), from the first
-  sample's R_h.
+  equivalent white noise of that shared error, R^B' + N·C
+  (``kalman.joseph_first_of_two``), from the first sample's R_h.
 """
 
 import math

@@ -188,7 +188,7 @@ class Channel:
     def innovation_ratio(self, nis: float) -> float:
         """Eqs. (15)-(17): push v²/C and return α_C, the actual over the theoretical spread."""
         self.window.append(nis)
-        return math.sqrt(sum(self.window) / len(self.window))
+        return math.sqrt(math.fsum(self.window) / len(self.window))
 
     def estimate_noise(self, innovation: float, hph: float) -> None:
         """Eqs. (22) and (28), with H K_{k-1} = H P⁻ Hᵀ/(H P⁻ Hᵀ + R̂_{k-1}), the gain before
@@ -282,7 +282,7 @@ class XuSHAEKF(Estimator):
             self._acc_diffs.append((acc - self._acc_last) ** 2)
         self._acc_last = self.u = acc
         if self.params.adaptive and self._acc_diffs:
-            estimate = math.sqrt(sum(self._acc_diffs) / (2.0 * len(self._acc_diffs)))
+            estimate = math.sqrt(math.fsum(self._acc_diffs) / (2.0 * len(self._acc_diffs)))
             self.acc_noise_est = max(self.params.acc_noise_std, estimate)
 
     def _select_source(self) -> None:

@@ -92,6 +92,7 @@ from altfusion.estimators.kalman import (
     predict_constant_acceleration,
     quadratic_form,
     reset_state,
+    running_sum,
     sparse_dot,
     update_scalar,
     white_jerk_noise,
@@ -145,9 +146,9 @@ def unify_time(history, t_b: float) -> float:
 def weighted_fusion(heights: dict[str, float], variances: dict[str, float],
                     ) -> tuple[float, float, dict[str, float]]:
     """Eqs. (7)-(8): y = Σ ω_i x_i, ω_i = [σ_i² Σ 1/σ_j²]⁻¹; returns y, σ_y², the weights."""
-    information = sum(1.0 / variances[name] for name in heights)
+    information = running_sum(1.0 / variances[name] for name in heights)
     weights = {name: 1.0 / (variances[name] * information) for name in heights}
-    return sum(weights[n] * heights[n] for n in heights), 1.0 / information, weights
+    return running_sum(weights[n] * heights[n] for n in heights), 1.0 / information, weights
 
 
 @dataclass(frozen=True)

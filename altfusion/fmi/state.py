@@ -142,10 +142,11 @@ def load(data: bytes, expected: StateHeader, own_module: str = "") -> Any:
 def check_like(new: Any, current: Any, path: str = "state") -> None:
     """A StateError naming the first field of ``new`` whose type differs from the same field
     of ``current`` (the instance's state, which ``new`` is about to replace): objects of the
-    same class with the same attributes, arrays of the same dtype kind and shape, numbers for
-    numbers (int or float), Booleans for Booleans, strings for strings, containers of the same
-    kind whose items match (each against the current item at its index, else the last one;
-    dicts by their common keys). None on either side is an unset optional field and matches
+    same class with the same attributes, arrays of the same dtype kind and shape, matrices
+    (lists of as many rows of numbers) of the same size, numbers for numbers (int or float),
+    Booleans for Booleans, strings for strings, containers of the same kind whose items
+    match (each against the current item at its index, else the last one; dicts by their
+    common keys). None on either side is an unset optional field and matches
     anything. Checked before anything is replaced, so that a well-checksummed state with a
     wrongly typed field (``h_est: "x"``) is refused at fmi2SetFMUstate, not found at a later
     step."""
