@@ -94,10 +94,9 @@ estimators/gating.py only); both gates share
   (onto the GPS sample while the baro is isolated).
 """
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
-
-import numpy as np
 
 from altfusion.estimators.base import Estimator, HealthParams, Verdict
 from altfusion.estimators.kalman import update_one_state
@@ -188,7 +187,7 @@ class HajiyevAdaptiveEstimator(Estimator):
             factor = (residual**2 - p.R_gps) / p.R_baro                         # (30)
         self.adaptive_factor = factor
         self.residual = residual
-        self.normalized_residual = residual / np.sqrt(p.R_baro + p.R_gps)       # (34)
+        self.normalized_residual = residual / math.sqrt(p.R_baro + p.R_gps)     # (34)
         self._update_estimate(self.baro, factor * p.R_baro, h_gps)
 
     def _update_estimate(self, prior: float, variance: float, h_gps: float) -> None:
@@ -335,4 +334,4 @@ class HajiyevAdaptiveEstimator(Estimator):
         """ĥ = h_B + K·Δ (eq. 15, the correction K·Δ held between GPS fusions)."""
         self.h_est = self.baro + self.correction
         self.vz_est = 0.0
-        self.h_std = float(np.sqrt(self.variance))
+        self.h_std = math.sqrt(self.variance)
