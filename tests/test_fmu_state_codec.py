@@ -36,9 +36,9 @@ def baseline_state() -> dict:
 @pytest.mark.parametrize("edit, named", [
     (lambda s: setattr(s["core"], "h_est", "x"), "state['core'].h_est is a str"),
     (lambda s: setattr(s["core"], "P", s["core"].P[:1]),
-     "state['core'].P is not a 3 x 3 matrix"),
+     "state['core'].P is not a square matrix"),
     (lambda s: setattr(s["core"], "P", [row[:1] for row in s["core"].P]),
-     "state['core'].P is not a 3 x 3 matrix"),
+     "state['core'].P is not a square matrix"),
     (lambda s: setattr(s["core"], "x", [complex(v) for v in s["core"].x]),
      "state['core'].x[0] is a complex"),
     (lambda s: setattr(s["core"], "started", 1.0), "state['core'].started is a float"),
@@ -62,3 +62,22 @@ def test_unset_optional_fields_and_number_types_match():
     stored["failure"] = "a message"                      # None in the current state
     stored["core"].n_rejected = 3.0                      # a number for a number
     check_like(stored, current)
+
+
+def test_a_covariance_of_another_size_with_its_parameters_is_a_state_of_its_kind():
+    """YangFusionKF's state count follows its parameters (the GNSS offset state only with
+    ``gps_bias_psd`` > 0), which a state brings along: a state of an instance with that
+    state is restored into one without it (6 x 6 over 5 x 5); a ragged covariance is not."""
+    from altfusion.estimators.yang import YangFusionKF, YangParams
+
+    def state(params) -> dict:
+        return {"core": YangFusionKF(params), "params": {}, "step_size": 0.01,
+                "start_time": 0.0, "failure": None}
+
+    with_offset = load(dump(HEADER, state(YangParams(gps_bias_psd=1e-4))), HEADER)
+    current = state(YangParams(gps_bias_psd=0.0))
+    assert (len(with_offset["core"].P), len(current["core"].P)) == (6, 5)
+    check_like(with_offset, current)
+    with_offset["core"].P = tuple(row[:5] for row in with_offset["core"].P)
+    with pytest.raises(StateError, match=re.escape("state['core'].P is not a square matrix")):
+        check_like(with_offset, current)

@@ -142,11 +142,11 @@ def load(data: bytes, expected: StateHeader, own_module: str = "") -> Any:
 def check_like(new: Any, current: Any, path: str = "state") -> None:
     """A StateError naming the first field of ``new`` whose type differs from the same field
     of ``current`` (the instance's state, which ``new`` is about to replace): objects of the
-    same class with the same attributes, arrays of the same dtype kind and shape, matrices
-    (lists of as many rows of numbers) of the same size, numbers for numbers (int or float),
-    Booleans for Booleans, strings for strings, containers of the same kind whose items
-    match (each against the current item at its index, else the last one; dicts by their
-    common keys). None on either side is an unset optional field and matches
+    same class with the same attributes, arrays of the same dtype kind and shape, square
+    matrices (lists of as many rows of numbers) for square matrices, numbers for numbers
+    (int or float), Booleans for Booleans, strings for strings, containers of the same kind
+    whose items match (each against the current item at its index, else the last one; dicts
+    by their common keys). None on either side is an unset optional field and matches
     anything. Checked before anything is replaced, so that a well-checksummed state with a
     wrongly typed field (``h_est: "x"``) is refused at fmi2SetFMUstate, not found at a later
     step."""
@@ -186,9 +186,9 @@ class _Checker:
             return
         self._seen.add((id(new), id(current)))
         if isinstance(current, (list, tuple, collections.deque)):
-            if _is_matrix(current) and not (_is_matrix(new) and len(new) == len(current)):
-                raise StateError(f"{path} is not a {len(current)} x {len(current)} matrix "
-                                 f"as this instance's is: {_kind(new)}")
+            if _is_matrix(current) and not _is_matrix(new):
+                raise StateError(f"{path} is not a square matrix as this instance's is: "
+                                 f"{_kind(new)}")
             for index, item in enumerate(new):
                 if len(current):
                     self.check(item, current[min(index, len(current) - 1)],
@@ -213,9 +213,10 @@ class _Checker:
 
 def _is_matrix(value: Any) -> bool:
     """A non-empty list or tuple of as many rows of numbers (a covariance of the
-    estimators' scalar arithmetic): its shape is that of the estimator's state, part of its
-    type as an array's shape is (lists of numbers alone may change length: a sensor's buffer
-    of drawn noise)."""
+    estimators' scalar arithmetic): a restored one must be square too, or the filter fails
+    at its next step. Its size may differ from the current one's (YangFusionKF's follows its
+    parameters, which the state brings along); lists of numbers alone may change length (a
+    sensor's buffer of drawn noise)."""
     return isinstance(value, (list, tuple)) and bool(value) and all(
         isinstance(row, (list, tuple)) and len(row) == len(value)
         and all(isinstance(v, (int, float)) for v in row) for row in value)
