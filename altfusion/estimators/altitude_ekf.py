@@ -328,7 +328,7 @@ class AltitudeEKF(Estimator):
             if p.laser_min_range > 0.0 and p.gate_sigma > 0.0 else None
         """PX4's on-ground range (None without ``laser_min_range`` or a gate)."""
         self._laser_out = False           # an invalid laser frame arrived in this step
-        self.handover = ReferenceHandover() \
+        self.handover = ReferenceHandover(name for name, _ in RANGEFINDERS) \
             if p.gps_handover and p.height_ref == "gps" and p.fault_detection else None
         """The GNSS reference's long test, for its hand-over to the terrain
         (:mod:`~altfusion.estimators.reference_handover`; None: ``gps_handover`` off, not the
@@ -773,8 +773,7 @@ class AltitudeEKF(Estimator):
         handover.gated(source, self.time, y, S, fused)
         if source != "gps" or not fused:
             return
-        last_fused = {name: self.aid[name].last_fused for name, _ in RANGEFINDERS}
-        rangefinder = handover.shifted(self.time, last_fused, self.params.reset_timeout,
+        rangefinder = handover.shifted(self.time, self.aid, self.params.reset_timeout,
                                        self.P[T][T])
         if rangefinder is not None:
             self._hand_over(rangefinder, handover.reference.mean())

@@ -189,7 +189,7 @@ def white_jerk_noise(dt: float, jerk_psd: float) -> Matrix:
 
 
 def predict_constant_acceleration(x: Vector, P: Matrix, dt: float, Q: Matrix,
-                                  ) -> tuple[Vector, Matrix]:
+                                  ) -> tuple[list[float], list[list[float]]]:
     """:func:`predict` for the constant-acceleration model of (position, speed, acceleration),
     F = [[1, dt, dt²/2], [0, 1, dt], [0, 0, 1]], written out: x⁻ = F x, P⁻ = F P Fᵀ + Q.
 
@@ -215,9 +215,9 @@ def predict_constant_acceleration(x: Vector, P: Matrix, dt: float, Q: Matrix,
     m11 = r11 + dt * r12 + Q1[1]
     m12 = r12 + Q1[2]
     m22 = p22 + Q2[2]
-    x_new = (h + dt * v + half * a, v + dt * a, a)
+    x_new = [h + dt * v + half * a, v + dt * a, a]
     if len(x) == 3:
-        return x_new, ((m00, m01, m02), (m01, m11, m12), (m02, m12, m22))
+        return x_new, [[m00, m01, m02], [m01, m11, m12], [m02, m12, m22]]
     c0 = [p0 + dt * p1 + half * p2 + q                  # rows of F₃ times the constant
           for p0, p1, p2, q in zip(P0[3:], P1[3:], P2[3:], Q0[3:])]        # states' columns
     c1 = [p1 + dt * p2 + q for p1, p2, q in zip(P1[3:], P2[3:], Q1[3:])]
@@ -225,7 +225,7 @@ def predict_constant_acceleration(x: Vector, P: Matrix, dt: float, Q: Matrix,
     rows = [[m00, m01, m02, *c0], [m01, m11, m12, *c1], [m02, m12, m22, *c2]]
     for d0, d1, d2, P_k, Q_k in zip(c0, c1, c2, P[3:], Q[3:]):   # a loop and map: no frames
         rows.append([d0, d1, d2, *map(add, P_k[3:], Q_k[3:])])
-    return (*x_new, *x[3:]), rows
+    return [*x_new, *x[3:]], rows
 
 
 def constant_states_noise(Q: Matrix, variances: Sequence[float]) -> tuple[tuple[float, ...], ...]:
@@ -237,21 +237,9 @@ def constant_states_noise(Q: Matrix, variances: Sequence[float]) -> tuple[tuple[
               for i, variance in enumerate(variances)))
 
 
-def reset_state(x: Vector, P: Matrix, index: int, value: float, variance: float,
-                ) -> tuple[tuple[float, ...], tuple[tuple[float, ...], ...]]:
-    """x[index] set to ``value`` with variance ``variance``, uncorrelated with the other
-    states (a reset onto a measurement: its row and column of P zero but the diagonal)."""
-    x_new = tuple(value if i == index else xi for i, xi in enumerate(x))
-    P_new = tuple(tuple(variance if (i == index and j == index) else
-                        0.0 if (i == index or j == index) else p for j, p in enumerate(row))
-                  for i, row in enumerate(P))
-    return x_new, P_new
-
-
 def shift_state(x, P, index: int, innovation: float, variance: float) -> None:
-    """In place, for a mutable state (numpy arrays or lists): x[index] moved by
-    ``innovation``, its variance ``variance``, uncorrelated with the other states (a reset
-    onto a measurement, :func:`reset_state` for the immutable tuples)."""
+    """In place: x[index] moved by ``innovation``, its variance ``variance``, uncorrelated
+    with the other states (a reset onto a measurement)."""
     x[index] += innovation
     decorrelate(P, index, variance)
 

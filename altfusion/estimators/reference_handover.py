@@ -37,8 +37,9 @@ the GNSS only, not of a baro reference (its slow drift is its nature).
 """
 
 import math
+from collections.abc import Iterable, Mapping
 
-from altfusion.estimators.aid_source import InnovationWindow
+from altfusion.estimators.aid_source import AidSource, InnovationWindow
 from altfusion.estimators.fault_detection import BIAS_MIN_SAMPLES, BIAS_SIGMAS, agrees
 
 SPAN = 30.0
@@ -51,22 +52,24 @@ outage off by more than its noise is the fault layer's to judge in its first sec
 (measured: a GNSS back 50 m off, before its bias test isolated it, handed the datum over
 within a second, re-admitted with the offset; PX4 does not re-admit it)."""
 
-RANGEFINDERS = ("radar", "laser")
+REFERENCE = "gps"
+"""The source whose shift is judged: the GNSS height reference."""
 
 
 class ReferenceHandover:
-    """The long innovation windows of the GNSS reference and of the rangefinders."""
+    """The long innovation windows of the GNSS reference and of the estimator's
+    rangefinders."""
 
     __slots__ = ("windows",)
 
-    def __init__(self) -> None:
-        self.windows = {name: InnovationWindow() for name in ("gps", *RANGEFINDERS)}
+    def __init__(self, rangefinders: Iterable[str]) -> None:
+        self.windows = {name: InnovationWindow() for name in (REFERENCE, *rangefinders)}
         """The innovations over :data:`SPAN` of the GNSS reference and of each rangefinder."""
 
     @property
     def reference(self) -> InnovationWindow:
         """The GNSS reference's window."""
-        return self.windows["gps"]
+        return self.windows[REFERENCE]
 
     def gated(self, source: str, now: float, innovation: float, variance: float,
               fused: bool) -> None:
@@ -80,19 +83,19 @@ class ReferenceHandover:
         else:
             window.clear()
 
-    def shifted(self, now: float, last_fused: dict[str, float], timeout: float,
+    def shifted(self, now: float, aid: Mapping[str, AidSource], timeout: float,
                 terrain_variance: float) -> str | None:
         """The rangefinder that shows the reference shifted (module documentation), or
-        None. ``last_fused``: each rangefinder's time of last fusion."""
+        None. ``aid``: the estimator's sources (a rangefinder's time of last fusion)."""
         window = self.reference
         if window.n < BIAS_MIN_SAMPLES or now - window.samples[0][0] < COVERED * SPAN:
             return None
         mean, spread = window.mean(), math.sqrt(window.mean_variance())
         if abs(mean) <= BIAS_SIGMAS * spread:
             return None
-        for name in RANGEFINDERS:
-            other = self.windows[name]
-            if other.n >= BIAS_MIN_SAMPLES and now - last_fused[name] <= timeout \
+        for name, other in self.windows.items():
+            if name != REFERENCE and other.n >= BIAS_MIN_SAMPLES \
+                    and now - aid[name].last_fused <= timeout \
                     and terrain_variance < other.mean_variance() \
                     and agrees(other, BIAS_SIGMAS, mean, spread):
                 return name

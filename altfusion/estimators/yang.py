@@ -89,10 +89,12 @@ from altfusion.estimators.base import MAX_DELAY, Estimator, HealthParams
 from altfusion.estimators.health_params import PX4_HEIGHT_BIAS_PSD
 from altfusion.estimators.kalman import (
     constant_states_noise,
+    decorrelate,
+    diagonal,
     predict_constant_acceleration,
     quadratic_form,
-    reset_state,
     running_sum,
+    shift_state,
     sparse_dot,
     update_scalar,
     white_jerk_noise,
@@ -232,7 +234,7 @@ class YangFusionKF(Estimator):
 
     def initialize_filter(self) -> None:
         p = self.params
-        self.x = (0.0,) * self._n
+        self.x = [0.0] * self._n
         self.P = self._initial_covariance(p.R_baro)
         self.history = {name: deque(maxlen=2) for name in HEIGHT_SENSORS}
         self.variances = {"radar": p.R_radar, "gps": p.R_gps, "baro": p.R_baro}
@@ -361,9 +363,9 @@ class YangFusionKF(Estimator):
         variances (their estimates kept): a prediction that drifted out of every gate had an
         overconfident speed and acceleration."""
         if source == "gps_vz":
-            self.x, self.P = reset_state(self.x, self.P, 1, self.x[1] + innovation, variance)
+            shift_state(self.x, self.P, 1, innovation, variance)
             return
-        self.x = (self.x[0] + innovation, *self.x[1:])
+        self.x[0] += innovation
         self.P = self._initial_covariance(variance)
 
     def reset_offset(self, source: str, innovation: float, variance: float) -> bool:
@@ -372,8 +374,7 @@ class YangFusionKF(Estimator):
         offset = OFFSET_STATE.get(source, self._n)
         if offset >= self._n:
             return False
-        self.x, self.P = reset_state(self.x, self.P, offset, self.x[offset] + innovation,
-                                     variance)
+        shift_state(self.x, self.P, offset, innovation, variance)
         return True
 
     # ------------------------------------------------------------------ shared
@@ -391,14 +392,12 @@ class YangFusionKF(Estimator):
                          variance + self.variances[name],
                          self.params.gate_sigma) is FUSED
 
-    def _initial_covariance(self, height_variance: float) -> tuple[tuple[float, ...], ...]:
+    def _initial_covariance(self, height_variance: float) -> list[list[float]]:
         """Diagonal: ``height_variance``, then the initial variances of speed, acceleration
         and the fault layer's accelerometer bias, baro offset and GPS offset (0: known)."""
         p = self.params
-        diagonal = (height_variance, p.P0_vz, p.P0_az, p.P0_acc_bias, p.P0_baro_bias,
-                    0.0)[:self._n]
-        return tuple(tuple(v if i == j else 0.0 for j in range(self._n))
-                     for i, v in enumerate(diagonal))
+        return diagonal((height_variance, p.P0_vz, p.P0_az, p.P0_acc_bias, p.P0_baro_bias,
+                         0.0)[:self._n])
 
     def _benchmark(self, now: float) -> str | None:
         """The first live height sensor in order of decreasing sampling period (Section 4.2)."""
@@ -421,7 +420,8 @@ class YangFusionKF(Estimator):
 
     def _start(self) -> None:
         """Start the filter at the first fusion: h = y, Var h = σ_y², uncorrelated."""
-        self.x, self.P = reset_state(self.x, self.P, 0, self.h_fused, self.fused_std**2)
+        self.x[0] = self.h_fused
+        decorrelate(self.P, 0, self.fused_std**2)
         self.started = True
 
     def _publish(self) -> None:
