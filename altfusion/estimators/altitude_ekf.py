@@ -386,11 +386,14 @@ class AltitudeEKF(Estimator):
         e = dt                                            # ∂v⁺/∂(-b_a)
         a = a_in - x[BA]
         x = [x[H] + dt * x[V] + 0.5 * dt * dt * a, x[V] + dt * a, *x[2:]]
-        P[H] = [p0 + dt * p1 - c * p2 for p0, p1, p2 in zip(P[H], P[V], P[BA])]  # noqa: B905
-        P[V] = [p1 - e * p2 for p1, p2 in zip(P[V], P[BA])]     # noqa: B905 (a keyword call)
+        P_h, P_v, P_ba = P[H], P[V], P[BA]
+        for j in range(N):                                # rows h and v of F P, in place
+            p1, p2 = P_v[j], P_ba[j]                      # (a loop: cheaper than two lists'
+            P_h[j] = P_h[j] + dt * p1 - c * p2            # comprehensions at this size)
+            P_v[j] = p1 - e * p2
         # (F P) Fᵀ in columns h and v of rows h and v; the other rows take theirs from rows h
         # and v in the symmetry loop below (computing them here too would be overwritten)
-        for row in (P[H], P[V]):
+        for row in (P_h, P_v):
             row[H], row[V] = row[H] + dt * row[V] - c * row[BA], row[V] - e * row[BA]
         noise = self.sensor_noise["acc"] if self.acc_check is None else self.acc_check.noise
         scale = 1.0 if self.motion_noise is None else self.motion_noise.scale
@@ -402,7 +405,7 @@ class AltitudeEKF(Estimator):
             P[i][i] += psd * dt
         P[BA][BA] += (p.acc_bias_psd if acc_on else p.jerk_psd * scale) * dt
         for j in range(N):                                # exact symmetry
-            P[j][H], P[j][V] = P[H][j], P[V][j]
+            P[j][H], P[j][V] = P_h[j], P_v[j]
         self.x, self.P = x, P
 
     def checks_own_noise(self) -> bool:

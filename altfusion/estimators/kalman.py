@@ -216,16 +216,24 @@ def predict_constant_acceleration(x: Vector, P: Matrix, dt: float, Q: Matrix,
     m12 = r12 + Q1[2]
     m22 = p22 + Q2[2]
     x_new = [h + dt * v + half * a, v + dt * a, a]
-    if len(x) == 3:
-        return x_new, [[m00, m01, m02], [m01, m11, m12], [m02, m12, m22]]
-    c0 = [p0 + dt * p1 + half * p2 + q                  # rows of F₃ times the constant
-          for p0, p1, p2, q in zip(P0[3:], P1[3:], P2[3:], Q0[3:])]        # states' columns
-    c1 = [p1 + dt * p2 + q for p1, p2, q in zip(P1[3:], P2[3:], Q1[3:])]
-    c2 = list(map(add, P2[3:], Q2[3:]))
-    rows = [[m00, m01, m02, *c0], [m01, m11, m12, *c1], [m02, m12, m22, *c2]]
-    for d0, d1, d2, P_k, Q_k in zip(c0, c1, c2, P[3:], Q[3:]):   # a loop and map: no frames
-        rows.append([d0, d1, d2, *map(add, P_k[3:], Q_k[3:])])
-    return [*x_new, *x[3:]], rows
+    M0, M1, M2 = [m00, m01, m02], [m01, m11, m12], [m02, m12, m22]
+    rows = [M0, M1, M2]
+    n = len(x)
+    for k in range(3, n):                     # the constant states (plain loops: cheaper than
+        P_k, Q_k = P[k], Q[k]                 # a comprehension's frame at these sizes)
+        p0, p1, p2 = P0[k], P1[k], P2[k]
+        d0 = p0 + dt * p1 + half * p2 + Q0[k]     # F₃ times the constant states' columns
+        d1 = p1 + dt * p2 + Q1[k]
+        d2 = p2 + Q2[k]
+        M0.append(d0)
+        M1.append(d1)
+        M2.append(d2)
+        row = [d0, d1, d2]
+        for j in range(3, n):
+            row.append(P_k[j] + Q_k[j])
+        rows.append(row)
+        x_new.append(x[k])
+    return x_new, rows
 
 
 def constant_states_noise(Q: Matrix, variances: Sequence[float]) -> tuple[tuple[float, ...], ...]:
@@ -353,12 +361,20 @@ def predict_sparse(x: Vector, P: Matrix, F: Sequence[Sequence[tuple[int, float]]
     mirrored, so that P⁻ is exactly symmetric (P and Q must be symmetric)."""
     FP = [_times_row(P, F_a) for F_a in F]
     n = len(F)
-    P_new = [[0.0] * n for _ in range(n)]
-    for a, FP_a in enumerate(FP):
-        P_a, Q_a = P_new[a], Q[a]
+    P_new = list(map(list, Q))
+    for a in range(n):                    # plain loops (a comprehension's frame costs more)
+        FP_a, P_a = FP[a], P_new[a]
         for b in range(a, n):
-            P_a[b] = P_new[b][a] = sparse_dot(FP_a, F[b]) + Q_a[b]
-    x_new = [sparse_dot(x, F_a) for F_a in F]
+            total = 0.0                   # sparse_dot(FP_a, F[b]), written out
+            for i, f in F[b]:
+                total += f * FP_a[i]
+            P_a[b] = P_new[b][a] = total + P_a[b]
+    x_new = []
+    for F_a in F:
+        total = 0.0                       # sparse_dot(x, F_a)
+        for i, f in F_a:
+            total += f * x[i]
+        x_new.append(total)
     return (x_new if Bu is None else list(map(add, x_new, Bu))), P_new
 
 
@@ -406,21 +422,19 @@ def update_scalar_of(x: Vector, P: Matrix, H: Sequence[tuple[int, float]], innov
 def _gain_step(x: Vector, P: Matrix, row: list[float], K: list[float], S: float,
                innovation: float) -> tuple[list[float], list[list[float]]]:
     """x + K y and the Joseph form P - (K rᵀ + r Kᵀ) + S K Kᵀ of a scalar update of gain K
-    (r = P Hᵀ, S its innovation variance), each entry's sum the same float for (a, b) and
-    (b, a)."""
+    (r = P Hᵀ, S its innovation variance) for a symmetric P: the upper triangle computed and
+    mirrored, each entry's sum being the same float for (a, b) and (b, a)."""
     x_new = list(map(add, x, map(mul, K, repeat(innovation))))     # x + K y, without a frame
-    # One flat comprehension (a frame per row costs more than its arithmetic), cut into
-    # rows by map.
-    P_flat = [p_ab - (k_a * r_b + r_a * k_b) + k_a * k_b * S
-              for P_a, r_a, k_a in zip(P, row, K)
-              for p_ab, r_b, k_b in zip(P_a, row, K)]
-    return x_new, list(map(P_flat.__getitem__, _row_slices(len(K))))
-
-
-@cache
-def _row_slices(n: int) -> tuple[slice, ...]:
-    """The slices of the rows of an n x n matrix stored row after row in one list."""
-    return tuple(slice(i, i + n) for i in range(0, n * n, n))
+    P_new = list(map(list, P))
+    # Plain loops over indices: at these sizes a comprehension's frame (Python 3.11) costs
+    # more than the arithmetic it saves writing out.
+    n = len(K)
+    for a in range(n):
+        P_a, r_a, k_a, new_a = P[a], row[a], K[a], P_new[a]
+        for b in range(a, n):
+            k_b = K[b]
+            new_a[b] = P_new[b][a] = P_a[b] - (k_a * row[b] + r_a * k_b) + k_a * k_b * S
+    return x_new, P_new
 
 
 def _times_row(P: Matrix, H: Sequence[tuple[int, float]]) -> list[float]:
