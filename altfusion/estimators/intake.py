@@ -124,8 +124,11 @@ class SampleIntake:
         stuck = self.stuck
         checks = stuck.checks
         now = self.clock.now
-        found = [(stream, name, source) for stream, sample in samples.items()
-                 for name, source in stream.checked if checks[source].stuck(sample[name], now)]
+        found = []
+        for stream, sample in samples.items():          # loops: no comprehension's frame
+            for name, source in stream.checked:
+                if checks[source].stuck(sample[name], now):
+                    found.append((stream, name, source))
         gnss = samples.get(self.gnss_speed_stream) if self.gnss_speed_stream else None
         if gnss is not None:
             self._watch_receiver(gnss)

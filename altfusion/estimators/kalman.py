@@ -439,20 +439,30 @@ def _gain_step(x: Vector, P: Matrix, row: list[float], K: list[float], S: float,
 
 def _times_row(P: Matrix, H: Sequence[tuple[int, float]]) -> list[float]:
     """P Hᵀ for a sparse row H: each entry the sum of H's terms from 0 in H's order (as
-    :func:`sparse_dot`), written out for rows of up to four terms."""
+    :func:`sparse_dot`), written out for rows of up to four terms (appended in loops: at
+    these sizes a comprehension's frame costs more than the arithmetic)."""
+    row: list[float] = []
+    append = row.append
     if len(H) == 1:
         (i, h), = H
-        return [0.0 + h * P_a[i] for P_a in P]
-    if len(H) == 2:
+        for P_a in P:
+            append(0.0 + h * P_a[i])
+    elif len(H) == 2:
         (i, h), (j, g) = H
-        return [0.0 + h * P_a[i] + g * P_a[j] for P_a in P]
-    if len(H) == 3:
+        for P_a in P:
+            append(0.0 + h * P_a[i] + g * P_a[j])
+    elif len(H) == 3:
         (i, h), (j, g), (k, f) = H
-        return [0.0 + h * P_a[i] + g * P_a[j] + f * P_a[k] for P_a in P]
-    if len(H) == 4:
+        for P_a in P:
+            append(0.0 + h * P_a[i] + g * P_a[j] + f * P_a[k])
+    elif len(H) == 4:
         (i, h), (j, g), (k, f), (m, e) = H
-        return [0.0 + h * P_a[i] + g * P_a[j] + f * P_a[k] + e * P_a[m] for P_a in P]
-    return [sparse_dot(P_a, H) for P_a in P]
+        for P_a in P:
+            append(0.0 + h * P_a[i] + g * P_a[j] + f * P_a[k] + e * P_a[m])
+    else:
+        for P_a in P:
+            append(sparse_dot(P_a, H))
+    return row
 
 
 def running_sum(values: Iterable[float]) -> float:
