@@ -1,18 +1,27 @@
-"""Cost of one estimator ``do_step``, µs, for two versions of the code in the same run.
+"""Cost of one estimator ``do_step``, µs or instructions, for two versions of the code in the
+same run.
 
     python benchmarks/estimator_step_cost.py [--base /tmp/base] [--stop 60] [--repeat 5]
+                                             [--estimators all|NAME,...] [--instructions]
 
-The inputs an estimator sees in a system (default: YangFusionKF in ``yang2020``, AltitudeEKF
-in ``yang2020_altitude_ekf``: 100 Hz steps, baro and accelerometer at every step, GNSS at
-10 Hz, radio altimeter at 5 Hz) are recorded once, running the system's FMUs (``models/``
-must be built; any version will do: both versions step the same recorded inputs). Each
-version then steps a fresh estimator core over them, in a process of its own that imports
-that version's ``altfusion`` (``--base``: the root of another checkout, e.g.
-``git worktree add --detach /tmp/base 6300b44``), and reports the best of ``--repeat`` runs:
-the CPU time (``time.process_time``: the time the process waits for a core is left out) of a
-loop writing the inputs and stepping (``do_step`` and ``take_notes``, as the FMU adapter
-calls them), less that of the same loop writing the inputs only, over the steps. Timings on
-a shared machine still move by ±10 %: compare versions within one run.
+The inputs an estimator sees in its system (:data:`CASES`; by default YangFusionKF in
+``yang2020`` and AltitudeEKF in ``yang2020_altitude_ekf``, issue 28's two: 100 Hz steps, baro
+and accelerometer at every step, GNSS at 10 Hz, radio altimeter at 5 Hz; ``--estimators
+all``: every estimator) are recorded once, running the system's FMUs (``models/`` must be
+built; any version will do: both versions step the same recorded inputs). Each version then
+steps a fresh estimator core over them, in a process of its own that imports that version's
+``altfusion`` (``--base``: the root of another checkout, e.g. ``git worktree add --detach
+/tmp/base 6300b44``), and reports the best of ``--repeat`` runs: the CPU time
+(``time.process_time``: the time the process waits for a core is left out) of a loop writing
+the inputs and stepping (``do_step`` and ``take_notes``, as the FMU adapter calls them), less
+that of the same loop writing the inputs only, over the steps. Timings on a shared machine
+still move by ±10 %: compare versions within one run.
+
+``--instructions``: instructions per step instead, counted by valgrind (callgrind, as
+``instructions_per_step.py`` counts them: the same on a busy machine as on an idle one):
+two processes step a fresh core over all the recorded steps and over the first fifth of
+them, and the difference of their counts over the steps between is the cost of a step, the
+inputs' writes included, start-up removed (~50x slower than native).
 """
 
 import argparse
@@ -23,30 +32,36 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
+from instructions_per_step import callgrind_count
 
 ROOT = Path(__file__).resolve().parents[1]
 MODELS = ROOT / "models"
-CASES = (("yang2020", "YangFusionKF"), ("yang2020_altitude_ekf", "AltitudeEKF"))
+CASES = {"YangFusionKF": "yang2020", "AltitudeEKF": "yang2020_altitude_ekf",
+         "XuSHAEKF": "xu2016_hover15", "BaselineKF": "yang2020_baseline",
+         "WhangGAEstimator": "whang2008", "BaoDriftEstimator": "bao2017",
+         "HajiyevAdaptiveEstimator": "hajiyev"}
+"""Each estimator and the system whose inputs it steps on (its component ``estimator``)."""
+DEFAULT = ("YangFusionKF", "AltitudeEKF")
 
 WORKER = """
 import json, sys, time
+job = json.loads(sys.argv[1])
 sys.meta_path = [f for f in sys.meta_path if "__editable__" not in getattr(f, "__name__",
                  type(f).__module__)]
-sys.path.insert(0, sys.argv[1])
+sys.path.insert(0, job["root"])
 import numpy as np
 import altfusion
-assert altfusion.__file__.startswith(sys.argv[1]), altfusion.__file__
+assert altfusion.__file__.startswith(job["root"]), altfusion.__file__
 from altfusion.estimators.registry import ESTIMATOR_CLASSES
-data = np.load(sys.argv[2])
-names = json.loads(sys.argv[3])
-core_class = ESTIMATOR_CLASSES[sys.argv[4]]
-params = core_class.Params(**json.loads(sys.argv[5]))
-rows = data["inputs"].tolist()
+names = job["names"]
+core_class = ESTIMATOR_CLASSES[job["fmu"]]
+params = core_class.Params(**job["parameters"])
+rows = np.load(job["data"])["inputs"].tolist()[:job["limit"]]
 kinds = [int if n.endswith("_count") else bool if n.endswith(("_fix", "_valid")) else float
          for n in names]
 rows = [[kind(v) for kind, v in zip(kinds, row)] for row in rows]
 def run(step):
-    core = core_class(params, step_size=float(sys.argv[7]))
+    core = core_class(params, step_size=job["step"])
     dt, clock = core.dt, core.clock
     start = time.process_time()
     for n, row in enumerate(rows):
@@ -57,9 +72,11 @@ def run(step):
             core.take_notes()
     return time.process_time() - start, core
 best = float("inf")
-for _ in range(int(sys.argv[6])):
+for _ in range(job["repeat"]):                 # repeat 0: stepped once, untimed (counted)
     stepped, core = run(True)
     best = min(best, (stepped - run(False)[0]) / len(rows))
+if not job["repeat"]:
+    core = run(True)[1]
 print(json.dumps({"us": best * 1e6, "h_est": core.h_est}))
 """
 
@@ -88,13 +105,20 @@ def record_inputs(system: str, stop: float, folder: Path) -> tuple[Path, list[st
     return path, names, dict(estimator.parameters), estimator.step_size
 
 
-def cost(root: Path, data: Path, names: list[str], fmu: str, parameters: dict, repeat: int,
-         step: float) -> dict:
-    output = subprocess.run(
-        [sys.executable, "-c", WORKER, str(root), str(data), json.dumps(names), fmu,
-         json.dumps(parameters), str(repeat), str(step)],
-        check=True, capture_output=True, text=True).stdout
+def cost(job: dict) -> dict:
+    """The worker's result for ``job`` (its CPU time per step, its last height)."""
+    output = subprocess.run([sys.executable, "-c", WORKER, json.dumps(job)],
+                            check=True, capture_output=True, text=True).stdout
     return json.loads(output)
+
+
+def instructions(job: dict, steps: int) -> float:
+    """Instructions per step of ``job``'s estimator: stepping all ``steps`` less stepping the
+    first fifth of them, over the steps between."""
+    few = steps // 5
+    counts = [callgrind_count(WORKER, json.dumps({**job, "repeat": 0, "limit": limit}))
+              for limit in (steps, few)]
+    return (counts[0] - counts[1]) / (steps - few)
 
 
 def main() -> None:
@@ -102,15 +126,33 @@ def main() -> None:
     parser.add_argument("--base", type=Path, help="root of the other version's checkout")
     parser.add_argument("--stop", type=float, default=60.0)
     parser.add_argument("--repeat", type=int, default=5)
+    parser.add_argument("--estimators", default=",".join(DEFAULT),
+                        help="'all' or estimator names, comma-separated (default: "
+                             f"{','.join(DEFAULT)})")
+    parser.add_argument("--instructions", action="store_true",
+                        help="count instructions per step (valgrind) instead of timing")
     args = parser.parse_args()
+    chosen = tuple(CASES) if args.estimators == "all" else tuple(args.estimators.split(","))
+    unknown = [name for name in chosen if name not in CASES]
+    if unknown:
+        parser.error(f"unknown estimator(s) {', '.join(unknown)}; known: {', '.join(CASES)}")
     roots = {"this": ROOT, **({"base": args.base.resolve()} if args.base else {})}
     with tempfile.TemporaryDirectory() as folder:
-        for system, fmu in CASES:
+        for fmu in chosen:
+            system = CASES[fmu]
             data, names, parameters, step = record_inputs(system, args.stop, Path(folder))
+            steps = len(np.load(data)["inputs"])
             for label, root in roots.items():
-                result = cost(root, data, names, fmu, parameters, args.repeat, step)
-                print(f"{fmu:14s} {system:22s} {label:5s} {result['us']:7.2f} µs per do_step "
-                      f"(h_est at the end {result['h_est']!r})", flush=True)
+                job = {"root": str(root), "data": str(data), "names": names, "fmu": fmu,
+                       "parameters": parameters, "repeat": args.repeat, "step": step,
+                       "limit": steps}
+                if args.instructions:
+                    figure = f"{instructions(job, steps):9,.0f} instructions per do_step"
+                else:
+                    result = cost(job)
+                    figure = (f"{result['us']:7.2f} µs per do_step (h_est at the end "
+                              f"{result['h_est']!r})")
+                print(f"{fmu:24s} {system:22s} {label:5s} {figure}", flush=True)
 
 
 if __name__ == "__main__":
