@@ -3,6 +3,7 @@ same run.
 
     python benchmarks/estimator_step_cost.py [--base /tmp/base] [--stop 60] [--repeat 5]
                                              [--estimators all|NAME,...] [--instructions]
+                                             [--python INTERPRETER ...]
 
 The inputs an estimator sees in its system (:data:`CASES`; by default YangFusionKF in
 ``yang2020`` and AltitudeEKF in ``yang2020_altitude_ekf``, issue 28's two: 100 Hz steps, baro
@@ -22,6 +23,10 @@ still move by ±10 %: compare versions within one run.
 two processes step a fresh core over all the recorded steps and over the first fifth of
 them, and the difference of their counts over the steps between is the cost of a step, the
 inputs' writes included, start-up removed (~50x slower than native).
+
+``--python``: step in these interpreters instead of this one (each needs numpy, scipy, fmpy,
+pythonfmu and python-control importable; ``altfusion`` comes from the version's root): FMUs
+run in their host's Python, 3.10 or later, and its version sets the estimators' speed.
 """
 
 import argparse
@@ -29,6 +34,7 @@ import json
 import subprocess
 import sys
 import tempfile
+from itertools import product
 from pathlib import Path
 
 import numpy as np
@@ -105,20 +111,28 @@ def record_inputs(system: str, stop: float, folder: Path) -> tuple[Path, list[st
     return path, names, dict(estimator.parameters), estimator.step_size
 
 
-def cost(job: dict) -> dict:
-    """The worker's result for ``job`` (its CPU time per step, its last height)."""
-    output = subprocess.run([sys.executable, "-c", WORKER, json.dumps(job)],
+def cost(job: dict, python: str) -> dict:
+    """The worker's result for ``job`` in the interpreter ``python`` (its CPU time per step,
+    its last height)."""
+    output = subprocess.run([python, "-c", WORKER, json.dumps(job)],
                             check=True, capture_output=True, text=True).stdout
     return json.loads(output)
 
 
-def instructions(job: dict, steps: int) -> float:
-    """Instructions per step of ``job``'s estimator: stepping all ``steps`` less stepping the
-    first fifth of them, over the steps between."""
+def instructions(job: dict, steps: int, python: str) -> float:
+    """Instructions per step of ``job``'s estimator in the interpreter ``python``: stepping
+    all ``steps`` less stepping the first fifth of them, over the steps between."""
     few = steps // 5
-    counts = [callgrind_count(WORKER, json.dumps({**job, "repeat": 0, "limit": limit}))
+    counts = [callgrind_count(WORKER, json.dumps({**job, "repeat": 0, "limit": limit}),
+                              python=python)
               for limit in (steps, few)]
     return (counts[0] - counts[1]) / (steps - few)
+
+
+def python_version(python: str) -> str:
+    """The version of the interpreter ``python`` (3.11.7...)."""
+    return subprocess.run([python, "-c", "import platform; print(platform.python_version())"],
+                          check=True, capture_output=True, text=True).stdout.strip()
 
 
 def main() -> None:
@@ -131,7 +145,10 @@ def main() -> None:
                              f"{','.join(DEFAULT)})")
     parser.add_argument("--instructions", action="store_true",
                         help="count instructions per step (valgrind) instead of timing")
+    parser.add_argument("--python", action="append", default=None,
+                        help="interpreter to step in (repeatable; default: this one)")
     args = parser.parse_args()
+    pythons = {python_version(python): python for python in args.python or [sys.executable]}
     chosen = tuple(CASES) if args.estimators == "all" else tuple(args.estimators.split(","))
     unknown = [name for name in chosen if name not in CASES]
     if unknown:
@@ -142,17 +159,18 @@ def main() -> None:
             system = CASES[fmu]
             data, names, parameters, step = record_inputs(system, args.stop, Path(folder))
             steps = len(np.load(data)["inputs"])
-            for label, root in roots.items():
+            for (label, root), (version, python) in product(roots.items(), pythons.items()):
                 job = {"root": str(root), "data": str(data), "names": names, "fmu": fmu,
                        "parameters": parameters, "repeat": args.repeat, "step": step,
                        "limit": steps}
                 if args.instructions:
-                    figure = f"{instructions(job, steps):9,.0f} instructions per do_step"
+                    figure = f"{instructions(job, steps, python):9,.0f} instructions per do_step"
                 else:
-                    result = cost(job)
+                    result = cost(job, python)
                     figure = (f"{result['us']:7.2f} µs per do_step (h_est at the end "
                               f"{result['h_est']!r})")
-                print(f"{fmu:24s} {system:22s} {label:5s} {figure}", flush=True)
+                print(f"{fmu:24s} {system:22s} {label:5s} Python {version:7s} {figure}",
+                      flush=True)
 
 
 if __name__ == "__main__":

@@ -51,14 +51,15 @@ def _setarch_works() -> bool:
 
 
 def callgrind_count(code: str, argument: str, env: dict[str, str] | None = None,
-                    cwd: Path | None = None) -> int:
+                    cwd: Path | None = None, python: str = sys.executable) -> int:
     """Instructions of a whole ``python -c code argument`` process, counted by callgrind with
     ``PYTHONHASHSEED`` fixed, OpenBLAS on one thread and address-space randomization off
-    where ``setarch`` runs (``env`` added to the environment, run in ``cwd``)."""
+    where ``setarch`` runs (``env`` added to the environment, run in ``cwd``; ``python``:
+    the interpreter, this one by default)."""
     no_aslr = ["setarch", platform.machine(), "-R"] if _setarch_works() else []
     completed = subprocess.run(
         [*no_aslr, "valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null",
-         sys.executable, "-c", code, argument],
+         python, "-c", code, argument],
         capture_output=True, text=True, check=True, cwd=cwd,
         env={**os.environ, "PYTHONHASHSEED": "0", "OPENBLAS_NUM_THREADS": "1",
              "OMP_NUM_THREADS": "1", **(env or {})})
