@@ -159,6 +159,8 @@ def with_field(data: bytes, name: str, value) -> bytes:
     ("h_est", "x", r"\.h_est is a str \('x'\) where this instance has a float"),
     ("P", {"$t": "ndarray", "dtype": "<f8", "shape": [1], "data": "AAAAAAAAAAA="},
      r"\.P is an array of float64 \[1\] where this instance has a list \(\[\["),
+    ("x", {"$t": "list", "v": [0.0, 0.0]},
+     r"\.x has 2 states where its covariance .*\.P is 3 x 3"),
 ])
 def test_a_state_with_a_wrongly_typed_field_is_refused_at_set_state(fmus, name, value, reason):
     """A correct checksum does not make a state this instance's: fmi2SetFMUstate checks it

@@ -41,6 +41,8 @@ def baseline_state() -> dict:
      "state['core'].P is not a square matrix"),
     (lambda s: setattr(s["core"], "x", [complex(v) for v in s["core"].x]),
      "state['core'].x[0] is a complex"),
+    (lambda s: setattr(s["core"], "x", s["core"].x[:2]),
+     "state['core'].x has 2 states where its covariance state['core'].P is 3 x 3"),
     (lambda s: setattr(s["core"], "started", 1.0), "state['core'].started is a float"),
     (lambda s: delattr(s["core"], "bias"), "lacks ['bias']"),
     (lambda s: s.update(step_size="0.01"), "state['step_size'] is a str"),

@@ -96,6 +96,7 @@ from altfusion.estimators.ground_range import GroundRange
 from altfusion.estimators.health import NOISE_CHECKED, STEP_BITS, UNKNOWN_STD
 from altfusion.estimators.health_params import PX4_HEIGHT_BIAS_PSD
 from altfusion.estimators.kalman import (
+    STATE_AND_COVARIANCE,
     decorrelate,
     inflate_along,
     move_datum,
@@ -277,6 +278,7 @@ class AltitudeEKF(Estimator):
 
     Params = AltitudeEKFParams
     streams = (BARO_ALL, GPS_ALL, RADAR, LASER, ACC)
+    state_covariances = STATE_AND_COVARIANCE
 
     def configure(self, clock) -> None:
         p = self.params

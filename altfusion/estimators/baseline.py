@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 from altfusion.estimators.base import Estimator, HealthParams, Verdict
 from altfusion.estimators.kalman import (
+    STATE_AND_COVARIANCE,
     diagonal,
     predict_sparse,
     quadratic_form,
@@ -67,6 +68,7 @@ class BaselineKF(Estimator):
 
     Params = BaselineKFParams
     streams = (BARO, GPS)
+    state_covariances = STATE_AND_COVARIANCE
     stated_aliases = {"baro_bias_psd": "bias_psd"}
 
     def configure(self, clock) -> None:

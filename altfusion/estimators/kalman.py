@@ -117,6 +117,10 @@ def scalar_gate(innovation: float, variance: float, sigmas: float) -> bool:
 Vector = Sequence[float]
 Matrix = Sequence[Sequence[float]]
 
+STATE_AND_COVARIANCE = {"x": ("P",)}
+"""``state_covariances`` of a filter whose state vector is ``x`` and its covariance ``P``: a
+restored FMU state must keep the two one size (:mod:`altfusion.fmi.state`)."""
+
 
 def diagonal(variances: Sequence[float]) -> list[list[float]]:
     """The diagonal matrix of ``variances``, as rows (a covariance of independent errors)."""

@@ -122,6 +122,9 @@ class WhangGAEstimator(Estimator):
 
     Params = WhangParams
     streams = (BARO_T, GPS)
+    state_covariances = {"x": ("P", "P_error")}
+    """The state vector and its covariances, the filter's and its actual error's (a restored
+    FMU state must keep them one size: :mod:`altfusion.fmi.state`)."""
 
     def configure(self, clock) -> None:
         """F and Q of eq. (33) for one step of the estimator, built once: ``propagate`` is

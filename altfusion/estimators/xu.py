@@ -72,6 +72,7 @@ from dataclasses import dataclass, field
 
 from altfusion.estimators.base import Estimator, HealthParams, Verdict
 from altfusion.estimators.kalman import (
+    STATE_AND_COVARIANCE,
     decorrelate,
     diagonal,
     limit_variance,
@@ -208,6 +209,7 @@ class XuSHAEKF(Estimator):
 
     Params = XuParams
     streams = (ACC, LASER, BARO, GPS)
+    state_covariances = STATE_AND_COVARIANCE
     required_sources = {"acc": "its process model is driven by the accelerometer (xu2016 eqs. "
                                "10-11, 19: acc_z is the input u)"}
 

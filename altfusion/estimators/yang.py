@@ -88,6 +88,7 @@ from altfusion.estimators.aid_source import FUSED
 from altfusion.estimators.base import MAX_DELAY, Estimator, HealthParams
 from altfusion.estimators.health_params import PX4_HEIGHT_BIAS_PSD
 from altfusion.estimators.kalman import (
+    STATE_AND_COVARIANCE,
     constant_states_noise,
     decorrelate,
     diagonal,
@@ -210,6 +211,7 @@ class YangFusionKF(Estimator):
 
     Params = YangParams
     streams = (BARO, GPS_VZ, RADAR, ACC)
+    state_covariances = STATE_AND_COVARIANCE
     acc_drives_prediction = False
 
     def configure(self, clock) -> None:

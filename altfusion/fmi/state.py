@@ -205,10 +205,26 @@ class _Checker:
                                  f"has {extra}")
             for name, value in new_fields.items():
                 self.check(value, fields[name], f"{path}.{name}")
+            _check_covariances(new, type(current), path)
         elif isinstance(current, np.random.Generator) and (
                 type(new.bit_generator) is not type(current.bit_generator)):
             raise StateError(f"{path} draws from {type(new.bit_generator).__name__} where "
                              f"this instance has {type(current.bit_generator).__name__}")
+
+
+def _check_covariances(new: Any, kind: type, path: str) -> None:
+    """A StateError if a state vector of ``new`` and one of its covariances differ in size,
+    as the class ``kind`` of the current object declares them (``state_covariances``: the
+    vector's attribute -> its covariances' attributes, e.g. ``{"x": ("P",)}``): each may
+    legitimately have another size than the current one's (YangFusionKF's follows its
+    parameters), but not another than its partner's, or the filter fails at its next step."""
+    for vector, covariances in getattr(kind, "state_covariances", {}).items():
+        x = getattr(new, vector, None)
+        for name in covariances:
+            P = getattr(new, name, None)
+            if x is not None and P is not None and len(x) != len(P):
+                raise StateError(f"{path}.{vector} has {len(x)} states where its covariance "
+                                 f"{path}.{name} is {len(P)} x {len(P)}")
 
 
 def _is_matrix(value: Any) -> bool:
