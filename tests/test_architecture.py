@@ -171,3 +171,30 @@ def test_the_numerics_never_sum_floats_with_the_builtin_sum():
 
 def test_the_sum_check_finds_builtin_sum_calls():
     assert builtin_sum_calls("x = sum(w)\ny = math.fsum(w)\nz = np.sum(w)\n") == [1]
+
+
+def imported_packages(source: str) -> set[str]:
+    """The top-level packages ``source`` imports."""
+    found = set()
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Import):
+            found.update(alias.name.partition(".")[0] for alias in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+            found.add(node.module.partition(".")[0])
+    return found
+
+
+def test_the_estimators_import_no_numpy():
+    """The estimators step on Python floats (``estimators/kalman.py``): numpy's BLAS sums a
+    product's terms in an order of its processor's kernel, so that an estimator on arrays
+    gives other bits on another machine (``tests/test_blas_independence.py``). Its array
+    forms are the tests' reference (``tests/kalman_reference.py``)."""
+    found = sorted(str(path.relative_to(ROOT))
+                   for path in (ROOT / "altfusion" / "estimators").rglob("*.py")
+                   if "numpy" in imported_packages(path.read_text()))
+    assert found == []
+
+
+def test_the_import_check_finds_numpy_however_imported():
+    assert imported_packages("import numpy as np\nfrom numpy.linalg import solve\n"
+                             "from . import numbers\nimport math\n") == {"numpy", "math"}

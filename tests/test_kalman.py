@@ -1,5 +1,8 @@
 """The shared Kalman machinery (altfusion.estimators.kalman)."""
 
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 from hypothesis import given
@@ -8,26 +11,25 @@ from hypothesis import strategies as st
 from altfusion.estimators.kalman import (
     constant_states_noise,
     inflate_along,
-    joseph,
     joseph_first_of_two,
     limit_variance,
     move_datum,
-    predict,
     predict_constant_acceleration,
     predict_sparse,
     quadratic_form,
     rederive,
-    scalar_gate,
     shift_state,
     sparse_dot,
-    update,
     update_first_of_two,
     update_one_state,
     update_scalar,
     update_scalar_of,
-    update_state_component,
     white_jerk_noise,
 )
+from altfusion.estimators.registry import ESTIMATOR_CLASSES
+
+sys.path.insert(0, str(Path(__file__).parent))
+from kalman_reference import joseph, predict, update  # noqa: E402
 
 positive = st.floats(min_value=1e-3, max_value=1e4)
 
@@ -114,14 +116,10 @@ def test_a_sparse_rows_products_are_the_array_products_bit_for_bit(H):
             ((H_array @ x)[0], (H_array @ P @ H_array.T)[0, 0]))
 
 
-SPARSE_TRANSITIONS = {
-    "XuSHAEKF": lambda dt: (((0, 1.0), (1, dt), (2, -dt * dt / 2.0)), ((1, 1.0), (2, -dt)),
-                            ((2, 1.0),), ((3, 1.0),)),
-    "BaselineKF": lambda dt: (((0, 1.0), (1, dt)), ((1, 1.0),), ((2, 1.0),)),
-    "WhangGAEstimator": lambda dt: (((0, 1.0), (1, dt)), ((1, 1.0 - dt / 5.0),)),
-}
-"""The estimators' transition matrices as sparse rows (xu2016 eq. 10, a constant speed with
-a constant bias, whang2008 eq. 33 with τ = 5 s)."""
+SPARSE_TRANSITIONS = {"XuSHAEKF": "_Phi", "BaselineKF": "_F", "WhangGAEstimator": "_F"}
+"""The estimators that predict with :func:`predict_sparse`, and the attribute holding their
+transition matrix as sparse rows, built for their step (xu2016 eq. 10, a constant speed with
+a constant bias, whang2008 eq. 33)."""
 
 
 @pytest.mark.parametrize("model", sorted(SPARSE_TRANSITIONS))
@@ -132,7 +130,7 @@ def test_a_sparse_predict_is_the_matrix_one(model):
     rng = np.random.default_rng(13)
     for _ in range(300):
         dt = 10 ** rng.uniform(-3, 0)
-        rows = SPARSE_TRANSITIONS[model](dt)
+        rows = getattr(ESTIMATOR_CLASSES[model](step_size=dt), SPARSE_TRANSITIONS[model])
         n = len(rows)
         F = np.zeros((n, n))
         for a, row in enumerate(rows):
@@ -311,8 +309,8 @@ def test_a_limited_variance_keeps_the_correlations_and_the_other_states():
 
 def test_scalar_component_updates_one_by_one_are_the_joint_matrix_update():
     """Independent measurements of state components applied one at a time in scalar
-    arithmetic give the joint update (H = rows of I, R diagonal) to rounding; P stays
-    exactly symmetric and positive definite."""
+    arithmetic (H = a row of I) give the joint update (H = rows of I, R diagonal) to
+    rounding; P stays exactly symmetric and positive definite."""
     rng = np.random.default_rng(7)
     for _ in range(300):
         n = int(rng.integers(1, 6))
@@ -320,9 +318,10 @@ def test_scalar_component_updates_one_by_one_are_the_joint_matrix_update():
         rows = sorted(rng.choice(n, int(rng.integers(1, n + 1)), replace=False).tolist())
         z = 100 * rng.standard_normal(len(rows))
         variances = 10 ** rng.uniform(-3, 3, len(rows))
-        x_s, P_s = tuple(x), _as_tuples(P)
+        x_s, P_s = x.tolist(), P.tolist()
         for row, z_j, r_j in zip(rows, z, variances, strict=True):
-            x_s, P_s, y, S = update_state_component(x_s, P_s, row, float(z_j), float(r_j))
+            x_s, P_s, S = update_scalar(x_s, P_s, ((row, 1.0),), float(z_j) - x_s[row],
+                                        float(r_j))
         joint = update(x, P, z, np.eye(n)[rows], np.diag(variances))
         scale = np.abs(P).max()
         np.testing.assert_allclose(x_s, joint.x, rtol=1e-9, atol=1e-9 * (1 + np.abs(x).max()))
@@ -331,9 +330,9 @@ def test_scalar_component_updates_one_by_one_are_the_joint_matrix_update():
         assert np.all(np.linalg.eigvalsh(np.array(P_s)) > 0)
 
 
-def test_scalar_component_update_returns_innovation_and_its_variance():
-    x, P, y, S = update_state_component((1.0, 2.0), ((4.0, 1.0), (1.0, 3.0)), 1, 5.0, 1.0)
-    assert (y, S) == (3.0, 4.0)
+def test_scalar_component_update_returns_the_innovation_variance():
+    x, P, S = update_scalar([1.0, 2.0], [[4.0, 1.0], [1.0, 3.0]], ((1, 1.0),), 3.0, 1.0)
+    assert S == 4.0
     assert x == pytest.approx((1.0 + 0.25 * 3.0, 2.0 + 0.75 * 3.0))
     assert P[1][1] == pytest.approx(3.0 - 9.0 / 4.0)
 
@@ -344,12 +343,6 @@ def test_predict_propagates_mean_and_covariance():
     x, P = predict(np.array([1.0, 2.0]), np.eye(2), F, Q, np.array([[0.125], [0.5]]), 1.0)
     assert np.allclose(x, [2.125, 2.5])
     assert np.allclose(P, F @ F.T + Q)
-
-
-def test_gate_accepts_inside_and_rejects_outside():
-    assert scalar_gate(4.9, 1.0, 5.0)
-    assert not scalar_gate(5.1, 1.0, 5.0)
-    assert scalar_gate(1e9, 1.0, 0.0)  # disabled
 
 
 def test_filter_is_consistent_nis_mean_equals_measurement_dimension():

@@ -1,117 +1,25 @@
-"""The Kalman machinery every estimator shares: propagation, update, gating.
+"""The Kalman machinery every estimator shares: propagation and scalar updates.
 
-Written next to the equations (filterpy style) with the Joseph-form covariance update, which
-keeps P symmetric positive semi-definite for any gain, followed by explicit symmetrisation.
-All arrays are float numpy arrays; a scalar measurement has H of shape (1, n) and R (1, 1).
-Products are ``ndarray.dot``: the same BLAS call as ``@`` (the same floats), without the
-generalized-ufunc dispatch that dominates the cost of a product of 3x3 matrices.
-
-The estimators step on the same equations in scalar arithmetic on Python floats (vectors
-are sequences of floats, matrices sequences of rows), and never on the array forms, which
-are the textbook reference the scalar forms are tested against (tests/test_kalman.py: equal
-to rounding). Two reasons: a numpy operation on a 3x3 array costs ~0.5 µs whatever it
-computes, a float operation ~0.03 µs; and BLAS sums and fuses its products in an order of
-its own that depends on the processor (OpenBLAS picks its kernel at run time: with fused
-multiply-adds on Haswell and later, without on Sandy Bridge), so that an estimator stepped
-on arrays gives other bits on another machine. Python's float operations are IEEE 754's,
-rounded once each, on every machine.
+The estimators step on the textbook equations (x⁻ = F x + B u, P⁻ = F P Fᵀ + Q; the scalar
+update with the Joseph-form covariance (I - K H) P⁻ (I - K H)ᵀ + K R Kᵀ, which keeps P
+symmetric positive semi-definite for any gain) in scalar arithmetic on Python floats:
+vectors are sequences of floats, matrices sequences of rows, a measurement's H and a
+transition's F sparse rows of (state index, coefficient) pairs. Never on numpy arrays, for
+two reasons: a numpy operation on a 3x3 array costs ~0.5 µs whatever it computes, a float
+operation ~0.03 µs; and BLAS sums and fuses its products in an order of its own that depends
+on the processor (OpenBLAS picks its kernel at run time: with fused multiply-adds on Haswell
+and later, without on Sandy Bridge), so that an estimator stepped on arrays gives other bits
+on another machine. Python's float operations are IEEE 754's, rounded once each, on every
+machine. The array forms are the tests' reference (``tests/kalman_reference.py``): every
+form here equals them to rounding, some bit for bit (tests/test_kalman.py).
 """
 # ruff: noqa: B905  (the scalar forms zip sequences of equal lengths by construction; a
 # zip(..., strict=...) is a keyword call, which costs more than a short row's arithmetic)
 
 import math
 from collections.abc import Iterable, Sequence
-from functools import cache
 from itertools import repeat
 from operator import add, mul, truediv
-from typing import NamedTuple
-
-import numpy as np
-
-
-def symmetrize(P: np.ndarray) -> np.ndarray:
-    """(P + Pᵀ)/2: removes the asymmetry rounding errors accumulate."""
-    return 0.5 * (P + P.T)
-
-
-def predict(x: np.ndarray, P: np.ndarray, F: np.ndarray, Q: np.ndarray,
-            B: np.ndarray | None = None, u: np.ndarray | float | None = None,
-            ) -> tuple[np.ndarray, np.ndarray]:
-    """Time update: x⁻ = F x + B u,  P⁻ = F P Fᵀ + Q."""
-    x = F.dot(x)
-    if B is not None and u is not None:
-        x = x + B.dot(np.atleast_1d(u))
-    return x, symmetrize(F.dot(P).dot(F.T) + Q)
-
-
-class Update(NamedTuple):
-    """Result of a measurement update (a named tuple: built once per update, cheaply)."""
-
-    x: np.ndarray
-    P: np.ndarray
-    innovation: np.ndarray
-    """y = z - H x⁻"""
-    S: np.ndarray
-    """Innovation covariance H P⁻ Hᵀ + R."""
-    K: np.ndarray
-    """Gain P⁻ Hᵀ S⁻¹."""
-
-    @property
-    def nis(self) -> float:
-        """Normalised innovation squared yᵀ S⁻¹ y (χ² with dim(z) degrees of freedom)."""
-        return float(self.innovation @ np.linalg.solve(self.S, self.innovation))
-
-
-def update(x: np.ndarray, P: np.ndarray, z: np.ndarray | float, H: np.ndarray,
-           R: np.ndarray | float, gain_scale: float = 1.0) -> Update:
-    """Measurement update with the Joseph form.
-
-        y = z - H x⁻
-        S = H P⁻ Hᵀ + R
-        K = gain_scale · P⁻ Hᵀ S⁻¹
-        x = x⁻ + K y
-        P = (I - K H) P⁻ (I - K H)ᵀ + K R Kᵀ
-
-    ``gain_scale`` (a weight α ≤ 1 on the gain, xu2016 eq. 26) keeps the Joseph form exact
-    for the gain actually used.
-    """
-    z = np.asarray(z, dtype=float).reshape(-1)
-    R = np.asarray(R, dtype=float).reshape(len(z), len(z))
-    y = z - H.dot(x)
-    HP = H.dot(P)
-    if len(z) == 1:                   # a scalar S: no symmetrization, no LAPACK (a hot path)
-        S = HP.dot(H.T) + R
-        K = (gain_scale / S[0, 0]) * HP.T
-    else:
-        S = symmetrize(HP.dot(H.T) + R)
-        K = gain_scale * np.linalg.solve(S, HP).T
-    return Update(x + K.dot(y), joseph(P, K, H, R), y, S, K)
-
-
-def joseph(P: np.ndarray, K: np.ndarray, H: np.ndarray, R: np.ndarray | float) -> np.ndarray:
-    """P = (I - K H) P⁻ (I - K H)ᵀ + K R Kᵀ: the covariance after an update with the gain K,
-    whatever gain it is, for a measurement noise of covariance R. With the filter's own K
-    and R, :func:`update`'s P; with another R (the measurement's true noise where the
-    filter's R is not), the covariance of the filter's actual error."""
-    R = np.asarray(R, dtype=float).reshape(K.shape[1], K.shape[1])
-    I_KH = _identity(len(P)) - K.dot(H)
-    return symmetrize(I_KH.dot(P).dot(I_KH.T) + K.dot(R).dot(K.T))
-
-
-@cache
-def _identity(n: int) -> np.ndarray:
-    """I of size n, made once (read only: every use makes a new array from it)."""
-    identity = np.eye(n)
-    identity.flags.writeable = False
-    return identity
-
-
-def scalar_gate(innovation: float, variance: float, sigmas: float) -> bool:
-    """True if |y| ≤ sigmas·√S (the measurement passes a gate of ``sigmas`` standard deviations).
-
-    ``sigmas <= 0`` disables the gate."""
-    return sigmas <= 0 or innovation * innovation <= sigmas * sigmas * variance
-
 
 # ----------------------------------------------------------------- scalar arithmetic
 Vector = Sequence[float]
@@ -128,21 +36,21 @@ def diagonal(variances: Sequence[float]) -> list[list[float]]:
     return [[variance if i == j else 0.0 for j in range(n)] for i, variance in enumerate(variances)]
 
 
-# ------------------------------------------- the same floats, without the arrays
+# ------------------------------------------- the same floats as the arrays
 # BLAS sums a matrix product's terms with fused multiply-adds in its own order, so float
-# arithmetic rarely gives its floats. It does where each entry of the products in
-# :func:`update` and :func:`joseph` is one product, or one product plus a term times 1 (the
-# other terms times 0): a filter of one state, and a measurement of the first of two
-# states (H = [1, 0]). There a fused multiply-add rounds once where float arithmetic rounds
-# once too, and the order cannot matter: the floats are the same on any BLAS
-# (tests/test_kalman.py), without the arrays' cost. (update_state_component, below, is the
-# same update in another order of operations: equal to rounding, not bit for bit.)
+# arithmetic rarely gives its floats. It does where each entry of the products of the array
+# update and its Joseph form (tests/kalman_reference.py) is one product, or one product plus
+# a term times 1 (the other terms times 0): a filter of one state, and a measurement of the
+# first of two states (H = [1, 0]). There a fused multiply-add rounds once where float
+# arithmetic rounds once too, and the order cannot matter: the floats are the same on any
+# BLAS (tests/test_kalman.py). (update_scalar, below, is the same update in another order of
+# operations: equal to rounding, not bit for bit.)
 
 
 def update_one_state(x: float, P: float, z: float, R: float, gain_scale: float = 1.0,
                      ) -> tuple[float, float, float]:
-    """:func:`update` of a one-state filter (H = [1]) on floats: x, P and the gain K, the
-    floats :func:`update` gives for 1x1 arrays.
+    """The update of a one-state filter (H = [1]) on floats: x, P and the gain K, the
+    floats the array update gives for 1x1 arrays.
 
         S = P⁻ + R,  K = gain_scale·P⁻/S,  x = x⁻ + K (z - x⁻),
         P = (1 - K) P⁻ (1 - K) + K R K                                 (Joseph form)
@@ -154,8 +62,8 @@ def update_one_state(x: float, P: float, z: float, R: float, gain_scale: float =
 
 def update_first_of_two(x: Vector, P: Matrix, z: float, R: float,
                         ) -> tuple[list[float], list[list[float]], list[float]]:
-    """:func:`update` of a two-state filter by a measurement of its first state
-    (H = [1, 0]) on floats: x, P and the gain K, the floats :func:`update` gives for these
+    """The update of a two-state filter by a measurement of its first state
+    (H = [1, 0]) on floats: x, P and the gain K, the floats the array update gives for these
     arrays (section above); :func:`joseph_first_of_two` is its covariance."""
     (x0, x1), (p00, p01) = x, P[0]
     scale = 1.0 / (p00 + R)
@@ -165,7 +73,7 @@ def update_first_of_two(x: Vector, P: Matrix, z: float, R: float,
 
 
 def joseph_first_of_two(P: Matrix, K: Vector, R: float) -> list[list[float]]:
-    """:func:`joseph` of a two-state filter for H = [1, 0] on floats, the floats it gives
+    """The Joseph form of a two-state filter for H = [1, 0] on floats, the floats it gives
     for these arrays: with I - K H = [[1 - K₀, 0], [-K₁, 1]] each entry of M = (I - K H) P⁻
     is one product or a product and P⁻'s own entry, and so is each of A = M (I - K H)ᵀ;
     then A + K R Kᵀ, symmetrized."""
@@ -194,7 +102,7 @@ def white_jerk_noise(dt: float, jerk_psd: float) -> Matrix:
 
 def predict_constant_acceleration(x: Vector, P: Matrix, dt: float, Q: Matrix,
                                   ) -> tuple[list[float], list[list[float]]]:
-    """:func:`predict` for the constant-acceleration model of (position, speed, acceleration),
+    """The time update for the constant-acceleration model of (position, speed, acceleration),
     F = [[1, dt, dt²/2], [0, 1, dt], [0, 0, 1]], written out: x⁻ = F x, P⁻ = F P Fᵀ + Q.
 
     States after the first three (biases) are constant: F = diag(F₃, I), so their own block
@@ -318,29 +226,6 @@ def inflate_along(P, direction: Sequence[float], variance: float) -> None:
                 P_a[b] += variance * u_a * u_b
 
 
-def update_state_component(x: Vector, P: Matrix, index: int, z: float, variance: float,
-                           ) -> tuple[Vector, Matrix, float, float]:
-    """:func:`update` for one direct measurement z of x[index] with variance R (H = a row of
-    I), in scalar arithmetic; returns x, P, the innovation y and its variance S.
-
-        S = P_ii + R,  K = P_·i / S,  x = x⁻ + K y
-        P = (I - K H) P⁻ (I - K H)ᵀ + K R Kᵀ = P⁻ - (K P_i·ᵀ + P_·i Kᵀ) + S K Kᵀ  (Joseph form)
-
-    Each entry's sum is written so that it is the same float for (a, b) and (b, a): P stays
-    exactly symmetric. Several independent measurements (a diagonal R) may be applied one
-    after the other: the result is that of the joint update.
-    """
-    row = P[index]
-    S = row[index] + variance
-    K = [p / S for p in row]
-    y = z - x[index]
-    x_new = [xa + ka * y for xa, ka in zip(x, K, strict=True)]
-    P_new = [[p_ab - (k_a * r_b + r_a * k_b) + k_a * k_b * S               # lists: the
-              for p_ab, r_b, k_b in zip(P_a, row, K, strict=True)]         # fastest to build
-             for P_a, r_a, k_a in zip(P, row, K, strict=True)]
-    return x_new, P_new, y, S
-
-
 def quadratic_form(P: Matrix, H: Sequence[tuple[int, float]]) -> float:
     """H P Hᵀ for a sparse row H ((state index, coefficient) pairs): the variance of the
     measured combination of states, the innovation variance without R."""
@@ -356,7 +241,7 @@ def quadratic_form(P: Matrix, H: Sequence[tuple[int, float]]) -> float:
 
 def predict_sparse(x: Vector, P: Matrix, F: Sequence[Sequence[tuple[int, float]]], Q: Matrix,
                    Bu: Vector | None = None) -> tuple[list[float], list[list[float]]]:
-    """:func:`predict` for a transition matrix F given as sparse rows (each a tuple of
+    """The time update for a transition matrix F given as sparse rows (each a tuple of
     (state index, coefficient) pairs), in scalar arithmetic: x⁻ = F x + B u, P⁻ = F P Fᵀ + Q
     (``Bu``: B u, or None for none).
 
@@ -385,17 +270,18 @@ def predict_sparse(x: Vector, P: Matrix, F: Sequence[Sequence[tuple[int, float]]
 def update_scalar(x: Vector, P: Matrix, H: Sequence[tuple[int, float]], innovation: float,
                   variance: float, gain_scale: float = 1.0,
                   ) -> tuple[list[float], list[list[float]], float]:
-    """:func:`update` for one scalar measurement whose Jacobian row H is sparse (given as
+    """The update by one scalar measurement whose Jacobian row H is sparse (given as
     (state index, coefficient) pairs), in scalar arithmetic; ``innovation`` y = z - h(x⁻) is
     computed by the caller (an extended Kalman filter's nonlinear h); returns x, P and the
     innovation variance S.
 
         r = P⁻ Hᵀ,  S = H r + R,  K = α r / S,  x = x⁻ + K y
-        P = P⁻ - (K rᵀ + r Kᵀ) + S K Kᵀ            (Joseph form, as update_state_component)
+        P = P⁻ - (K rᵀ + r Kᵀ) + S K Kᵀ            (the Joseph form, expanded)
 
     The Joseph form (I - K H) P⁻ (I - K H)ᵀ + K R Kᵀ expands to the second line for any K,
     so it stays exact for a gain scaled by a weight α = ``gain_scale`` (xu2016 eq. 26). P
-    stays exactly symmetric (each entry's sum is the same float for (a, b) and (b, a))."""
+    must be symmetric (its upper triangle is read) and stays exactly so (each entry's sum
+    is the same float for (a, b) and (b, a))."""
     row = _times_row(P, H)
     S = sparse_dot(row, H) + variance
     if gain_scale == 1.0:
