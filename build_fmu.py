@@ -69,11 +69,15 @@ def stale(script: Path, fmu: Path) -> bool:
 
 
 def stage_core() -> Path:
-    """The private copy of the core every FMU bundles (``altfusion.fmi.bundle``)."""
+    """The private copy of the core every FMU bundles (``altfusion.fmi.bundle``), its hot
+    modules compiled (``altfusion.fmi.compile_core``)."""
     from altfusion.fmi.bundle import stage_core as stage
+    from altfusion.fmi.compile_core import compile_core
     from altfusion.version import CORE_VERSION
 
-    return stage(CORE, slave_scripts(), CORE_VERSION, STAGE)
+    core = stage(CORE, slave_scripts(), CORE_VERSION, STAGE)
+    compile_core(core)
+    return core
 
 
 def build_fmu(script: Path, dest: Path = MODELS, core: Path | None = None,
@@ -189,29 +193,34 @@ def main(argv: list[str] | None = None) -> int:
                         help="rerun the reference plots of the FMU pages and the replay of "
                              "docs/replay.md (about 1 min)")
     args = parser.parse_args(argv)
+    from altfusion.compiled import FOLDER
+    from altfusion.fmi.compile_core import CompileError, compile_core, outdated
     from altfusion.fmi.shim import ShimBuildError, compile_shim
 
     scripts = slave_scripts()
     targets = {script: MODELS / f"{model_name(script)}.fmu" for script in scripts}
     if args.check:
-        outdated = [fmu.name for script, fmu in targets.items() if stale(script, fmu)]
-        for name in outdated:
-            print(f"out of date: models/{name}")
-        return 1 if outdated else 0
+        late = [f"models/{fmu.name}" for script, fmu in targets.items() if stale(script, fmu)]
+        late += [f"{(p / FOLDER).relative_to(HERE)}" for p in outdated(CORE)]
+        for name in late:
+            print(f"out of date: {name}")
+        return 1 if late else 0
     MODELS.mkdir(exist_ok=True)
     problems = []
     core = shim = None
-    for script, fmu in targets.items():
-        if args.force or stale(script, fmu):
-            print(f"building models/{fmu.name}")
-            core = core or stage_core()
-            try:
+    try:
+        for package in compile_core(CORE):
+            print(f"compiled {(package / FOLDER).relative_to(HERE)}")
+        for script, fmu in targets.items():
+            if args.force or stale(script, fmu):
+                print(f"building models/{fmu.name}")
+                core = core or stage_core()
                 shim = shim or compile_shim(SHIM_BUILD)
-            except ShimBuildError as error:
-                print(f"error: {error}", file=sys.stderr)
-                return 1
-            build_fmu(script, core=core, shim=shim)
-        problems += [f"{fmu.name}: {p}" for p in validate_fmu(fmu)]
+                build_fmu(script, core=core, shim=shim)
+            problems += [f"{fmu.name}: {p}" for p in validate_fmu(fmu)]
+    except (CompileError, ShimBuildError) as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 1
     if problems:
         print("\n".join(problems), file=sys.stderr)
         return 1

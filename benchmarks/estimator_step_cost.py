@@ -3,7 +3,7 @@ same run.
 
     python benchmarks/estimator_step_cost.py [--base /tmp/base] [--stop 60] [--repeat 5]
                                              [--estimators all|NAME,...] [--instructions]
-                                             [--python INTERPRETER ...]
+                                             [--python INTERPRETER ...] [--sources]
 
 The inputs an estimator sees in its system (:data:`CASES`; by default YangFusionKF in
 ``yang2020`` and AltitudeEKF in ``yang2020_altitude_ekf``, issue 28's two: 100 Hz steps, baro
@@ -27,10 +27,16 @@ inputs' writes included, start-up removed (~50x slower than native).
 ``--python``: step in these interpreters instead of this one (each needs numpy, scipy, fmpy,
 pythonfmu and python-control importable; ``altfusion`` comes from the version's root): FMUs
 run in their host's Python, 3.10 or later, and its version sets the estimators' speed.
+
+Each version steps on its compiled modules where its build compiled them for the interpreter
+(:mod:`altfusion.compiled`; a checkout without them, or another interpreter, runs its Python
+sources). ``--sources``: also a row of this version on its Python sources
+(``ALTFUSION_PURE_PYTHON`` set), labelled ``py``.
 """
 
 import argparse
 import json
+import os
 import subprocess
 import sys
 import tempfile
@@ -39,6 +45,8 @@ from pathlib import Path
 
 import numpy as np
 from instructions_per_step import callgrind_count
+
+from altfusion.compiled import PURE_PYTHON
 
 ROOT = Path(__file__).resolve().parents[1]
 MODELS = ROOT / "models"
@@ -111,20 +119,26 @@ def record_inputs(system: str, stop: float, folder: Path) -> tuple[Path, list[st
     return path, names, dict(estimator.parameters), estimator.step_size
 
 
-def cost(job: dict, python: str) -> dict:
+def environment(label: str) -> dict[str, str]:
+    """The environment of a worker for the row ``label`` (``py``: on the Python sources)."""
+    return {PURE_PYTHON: "1" if label == "py" else ""}
+
+
+def cost(job: dict, python: str, label: str) -> dict:
     """The worker's result for ``job`` in the interpreter ``python`` (its CPU time per step,
     its last height)."""
-    output = subprocess.run([python, "-c", WORKER, json.dumps(job)],
-                            check=True, capture_output=True, text=True).stdout
+    output = subprocess.run([python, "-c", WORKER, json.dumps(job)], check=True,
+                            capture_output=True, text=True,
+                            env={**os.environ, **environment(label)}).stdout
     return json.loads(output)
 
 
-def instructions(job: dict, steps: int, python: str) -> float:
+def instructions(job: dict, steps: int, python: str, label: str) -> float:
     """Instructions per step of ``job``'s estimator in the interpreter ``python``: stepping
     all ``steps`` less stepping the first fifth of them, over the steps between."""
     few = steps // 5
     counts = [callgrind_count(WORKER, json.dumps({**job, "repeat": 0, "limit": limit}),
-                              python=python)
+                              env=environment(label), python=python)
               for limit in (steps, few)]
     return (counts[0] - counts[1]) / (steps - few)
 
@@ -147,13 +161,16 @@ def main() -> None:
                         help="count instructions per step (valgrind) instead of timing")
     parser.add_argument("--python", action="append", default=None,
                         help="interpreter to step in (repeatable; default: this one)")
+    parser.add_argument("--sources", action="store_true",
+                        help="also step this version on its Python sources (row 'py')")
     args = parser.parse_args()
     pythons = {python_version(python): python for python in args.python or [sys.executable]}
     chosen = tuple(CASES) if args.estimators == "all" else tuple(args.estimators.split(","))
     unknown = [name for name in chosen if name not in CASES]
     if unknown:
         parser.error(f"unknown estimator(s) {', '.join(unknown)}; known: {', '.join(CASES)}")
-    roots = {"this": ROOT, **({"base": args.base.resolve()} if args.base else {})}
+    roots = {"this": ROOT, **({"py": ROOT} if args.sources else {}),
+             **({"base": args.base.resolve()} if args.base else {})}
     with tempfile.TemporaryDirectory() as folder:
         for fmu in chosen:
             system = CASES[fmu]
@@ -164,9 +181,10 @@ def main() -> None:
                        "parameters": parameters, "repeat": args.repeat, "step": step,
                        "limit": steps}
                 if args.instructions:
-                    figure = f"{instructions(job, steps, python):9,.0f} instructions per do_step"
+                    figure = (f"{instructions(job, steps, python, label):9,.0f} "
+                              "instructions per do_step")
                 else:
-                    result = cost(job, python)
+                    result = cost(job, python, label)
                     figure = (f"{result['us']:7.2f} µs per do_step (h_est at the end "
                               f"{result['h_est']!r})")
                 print(f"{fmu:24s} {system:22s} {label:5s} Python {version:7s} {figure}",

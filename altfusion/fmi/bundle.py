@@ -23,12 +23,14 @@ public ``altfusion`` ones (:func:`public_module`): our runner imports its own co
 import ast
 import hashlib
 import json
+import os
 import re
 import shutil
 import subprocess
 import sys
 from pathlib import Path
 
+from altfusion.compiled import PURE_PYTHON
 from altfusion.version import BUNDLE_MANIFEST
 
 PACKAGE = "altfusion"
@@ -73,7 +75,8 @@ def rename_imports(source: str, new: str, origin: str = "<source>") -> str:
 
 def slave_modules(scripts: list[Path], package_dir: Path) -> list[str]:
     """The core modules (relative names) that importing the slave ``scripts`` loads, found in
-    a fresh interpreter so that nothing this process imported counts."""
+    a fresh interpreter so that nothing this process imported counts (running the Python
+    sources: the compiled modules are compiled into the copy, :mod:`altfusion.compiled`)."""
     paths = [str(package_dir.parent), *sorted({str(s.parent) for s in scripts})]
     probe = (
         "import importlib, json, sys\n"
@@ -82,7 +85,7 @@ def slave_modules(scripts: list[Path], package_dir: Path) -> list[str]:
         f"print(json.dumps(sorted(m for m in sys.modules if m.split('.')[0] == {PACKAGE!r})))\n"
     )
     found = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
-                           check=True)
+                           check=True, env={**os.environ, PURE_PYTHON: "1"})
     return [m.partition(".")[2] for m in json.loads(found.stdout) if m != PACKAGE]
 
 

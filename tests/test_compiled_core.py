@@ -1,0 +1,133 @@
+"""The compiled Kalman steps (:mod:`altfusion.compiled`): used only while they match their
+sources, and the same bits as the sources.
+
+``build_fmu.py`` compiles :data:`~altfusion.compiled.COMPILED` with mypyc for the interpreter
+running it. Here: after the build, the estimators step on the compiled modules; a stale,
+foreign or unreadable compilation is never used; and the Python sources, run in a process
+with :data:`~altfusion.compiled.PURE_PYTHON` set, give every estimator's recorded checksums
+(tests/test_estimator_checksums.py checks the compiled ones in this process), so each path
+is checked against the same recorded bits.
+"""
+
+import json
+import os
+import subprocess
+import sys
+import warnings
+from pathlib import Path
+
+import pytest
+
+import altfusion.estimators.kalman as kalman
+from altfusion.compiled import (
+    COMPILED,
+    FOLDER,
+    MANIFEST,
+    PURE_PYTHON,
+    compiled_path,
+    is_compiled,
+    manifest_for,
+    stale_sources,
+)
+
+TESTS = Path(__file__).resolve().parent
+ESTIMATORS = Path(kalman.__file__).resolve().parent
+ESTIMATORS = ESTIMATORS.parent if ESTIMATORS.name == FOLDER else ESTIMATORS
+
+
+def test_the_estimators_step_on_the_compiled_modules_after_the_build():
+    """With a compilation for this interpreter that matches the sources (what ``build_fmu.py``
+    leaves, ``build_fmu.py --check`` fails otherwise), ``kalman`` is the extension module."""
+    stale = stale_sources(ESTIMATORS)
+    if stale is None or os.environ.get(PURE_PYTHON, "") not in ("", "0"):
+        pytest.skip("nothing compiled for this interpreter (python build_fmu.py compiles) "
+                    f"or {PURE_PYTHON} set")
+    assert stale == [], f"{stale} changed since compiled: run python build_fmu.py"
+    assert is_compiled(kalman), kalman.__file__
+    assert Path(kalman.__file__).parent == ESTIMATORS / FOLDER
+    assert set(COMPILED["estimators"]) == {"kalman"}
+
+
+@pytest.fixture
+def package(tmp_path) -> Path:
+    """A package folder with one source and a manifest matching it for this interpreter."""
+    (tmp_path / "steps.py").write_text("def double(x: float) -> float:\n    return 2.0 * x\n")
+    (tmp_path / FOLDER).mkdir()
+    manifest = manifest_for(tmp_path, ("steps",))
+    (tmp_path / FOLDER / MANIFEST).write_text(json.dumps(manifest))
+    return tmp_path
+
+
+def _path(package: Path) -> tuple[list[str], list[str]]:
+    """compiled_path of ``package`` and the warnings it gave."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        path = compiled_path(str(package))
+    return path, [str(w.message) for w in caught]
+
+
+def test_a_compilation_matching_its_sources_is_used(package, monkeypatch):
+    monkeypatch.delenv(PURE_PYTHON, raising=False)
+    assert _path(package) == ([str(package / FOLDER)], [])
+
+
+def test_a_source_edited_since_compiled_runs_as_python_with_a_warning(package, monkeypatch):
+    """An edited source: the compilation is not used, and the warning names the source and
+    the command that compiles it again."""
+    monkeypatch.delenv(PURE_PYTHON, raising=False)
+    (package / "steps.py").write_text("def double(x: float) -> float:\n    return x + x\n")
+    path, messages = _path(package)
+    assert path == []
+    assert len(messages) == 1 and "steps.py" in messages[0] and "build_fmu.py" in messages[0]
+    (package / "steps.py").unlink()
+    assert _path(package)[0] == []
+
+
+@pytest.mark.parametrize("manifest", [
+    {"cache_tag": "cpython-399", "sources": {}},      # compiled for another interpreter
+    {"sources": {}},
+    ["not", "a", "manifest"],
+    "{truncated",
+])
+def test_a_foreign_or_unreadable_compilation_is_silently_not_used(package, monkeypatch,
+                                                                  manifest):
+    """Another interpreter's compilation (an FMU in a host running another Python) or a
+    manifest that is no manifest: the sources run, without a warning."""
+    monkeypatch.delenv(PURE_PYTHON, raising=False)
+    text = manifest if isinstance(manifest, str) else json.dumps(manifest)
+    (package / FOLDER / MANIFEST).write_text(text)
+    assert _path(package) == ([], [])
+
+
+@pytest.mark.parametrize("value, used", [("1", False), ("yes", False), ("0", True), ("", True)])
+def test_the_environment_variable_runs_the_sources(package, monkeypatch, value, used):
+    monkeypatch.setenv(PURE_PYTHON, value)
+    assert _path(package)[0] == ([str(package / FOLDER)] if used else [])
+
+
+WORKER = """
+import json, sys
+sys.path.insert(0, sys.argv[1])
+import altfusion.estimators.kalman as kalman
+from altfusion.compiled import is_compiled
+from test_estimator_checksums import CASES, checksums
+results = [[name, detection, checksums(name, detection)]
+           for name in CASES for detection in (True, False)]
+print(json.dumps({"compiled": is_compiled(kalman), "results": results}))
+"""
+
+
+def test_the_python_sources_give_every_recorded_checksum():
+    """Every case of tests/test_estimator_checksums.py (every estimator, each paper system,
+    the fault suite's flights, fault detection on and off) stepped on the Python sources
+    gives the checksums recorded there, as the compiled modules do in this process."""
+    from test_estimator_checksums import CHECKSUMS
+
+    environment = {**os.environ, PURE_PYTHON: "1"}
+    done = subprocess.run([sys.executable, "-c", WORKER, str(TESTS)], env=environment,
+                          capture_output=True, text=True, check=True)
+    found = json.loads(done.stdout)
+    assert found["compiled"] is False
+    assert len(found["results"]) == len(CHECKSUMS)
+    for name, detection, sums in found["results"]:
+        assert sums == CHECKSUMS[(name, detection)], (name, detection)
