@@ -131,3 +131,16 @@ def test_the_python_sources_give_every_recorded_checksum():
     assert len(found["results"]) == len(CHECKSUMS)
     for name, detection, sums in found["results"]:
         assert sums == CHECKSUMS[(name, detection)], (name, detection)
+
+
+def test_a_source_mypy_rejects_fails_the_compilation_naming_the_error(tmp_path):
+    """compile_core on a core whose compiled module does not type-check: a CompileError
+    quoting mypy's message with the file and line, and nothing left to be used."""
+    from altfusion.fmi.compile_core import CompileError, compile_core
+
+    folder = tmp_path / "altfusion_broken" / "estimators"
+    folder.mkdir(parents=True)
+    (folder / "kalman.py").write_text("def gain(P: float) -> float:\n    return 'P'\n")
+    with pytest.raises(CompileError, match=r"kalman\.py:2: error: Incompatible return"):
+        compile_core(folder.parent)
+    assert stale_sources(folder) is None
