@@ -15,6 +15,7 @@ from altfusion.estimators.kalman import (
     limit_variance,
     move_datum,
     predict_constant_acceleration,
+    predict_height_and_speed,
     predict_sparse,
     quadratic_form,
     rederive,
@@ -206,6 +207,34 @@ def test_scalar_constant_acceleration_predict_is_the_matrix_one():
         np.testing.assert_allclose(x_s, x_m, rtol=1e-12, atol=1e-12 * np.abs(x).max())
         np.testing.assert_allclose(P_s, P_m, rtol=1e-12, atol=1e-12 * np.abs(P_m).max())
         assert np.array_equal(np.array(P_s), np.array(P_s).T)
+
+
+@pytest.mark.parametrize("n, bias", [(3, 2), (7, 2), (5, 4)])
+def test_the_height_and_speed_predict_is_the_matrix_one(n, bias):
+    """h and v driven by a measured acceleration less a bias state, the other states
+    constant: x⁻ = F x + B a, and P with its rows h and v mirrored into columns h and v (as
+    the caller does after adding Q) is F P Fᵀ, to rounding; the rows other than h and v keep
+    P's entries outside columns h and v, bit for bit, and P itself is not changed."""
+    rng = np.random.default_rng(12)
+    for _ in range(300):
+        dt = 10 ** rng.uniform(-3, 0)
+        a = 10 * rng.standard_normal()
+        F = np.eye(n)
+        F[0, 1], F[0, bias], F[1, bias] = dt, -dt * dt / 2, -dt
+        B = np.zeros(n)
+        B[0], B[1] = dt * dt / 2, dt
+        P, x = _random_covariance(rng, n), 100 * rng.standard_normal(n)
+        rows = P.tolist()
+        x_s, P_s = predict_height_and_speed(x.tolist(), rows, dt, a, bias)
+        assert rows == P.tolist()
+        np.testing.assert_allclose(x_s, F @ x + B * a, rtol=1e-12,
+                                   atol=1e-12 * np.abs(x).max())
+        mirrored = np.array(P_s)
+        mirrored[:, :2] = mirrored[:2, :].T
+        expected = F @ P @ F.T
+        np.testing.assert_allclose(mirrored, expected, rtol=1e-12,
+                                   atol=1e-12 * np.abs(expected).max())
+        assert np.array_equal(np.array(P_s)[2:, 2:], P[2:, 2:])
 
 
 @pytest.mark.parametrize("constant", [1, 2])

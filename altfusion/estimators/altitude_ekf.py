@@ -100,6 +100,7 @@ from altfusion.estimators.kalman import (
     decorrelate,
     inflate_along,
     move_datum,
+    predict_height_and_speed,
     quadratic_form,
     rederive,
     shift_state,
@@ -361,8 +362,9 @@ class AltitudeEKF(Estimator):
         first in :meth:`fuse_samples`."""
 
     def _predict(self, acc_sample) -> None:
-        """x⁺ = F x + B a, P⁺ = F P Fᵀ + Q over one step (written out: F differs from I in
-        the rows of h and v only)."""
+        """x⁺ = F x + B a, P⁺ = F P Fᵀ + Q over one step (F P Fᵀ:
+        :func:`~altfusion.estimators.kalman.predict_height_and_speed`; Q in the rows of h and
+        v, then mirrored)."""
         clock, p = self.clock, self.params
         dt, now = clock.step_size, clock.now
         previous = self._acc
@@ -383,20 +385,8 @@ class AltitudeEKF(Estimator):
         self._acc_used = acc_on
         if not self.started:
             return
-        x, P = self.x, list(map(list.copy, self.P))
-        c = 0.5 * dt * dt                                 # ∂h⁺/∂(-b_a)
-        e = dt                                            # ∂v⁺/∂(-b_a)
-        a = a_in - x[BA]
-        x = [x[H] + dt * x[V] + 0.5 * dt * dt * a, x[V] + dt * a, *x[2:]]
-        P_h, P_v, P_ba = P[H], P[V], P[BA]
-        for j in range(N):                                # rows h and v of F P, in place
-            p1, p2 = P_v[j], P_ba[j]                      # (a loop: cheaper than two lists'
-            P_h[j] = P_h[j] + dt * p1 - c * p2            # comprehensions at this size)
-            P_v[j] = p1 - e * p2
-        # (F P) Fᵀ in columns h and v of rows h and v; the other rows take theirs from rows h
-        # and v in the symmetry loop below (computing them here too would be overwritten)
-        for row in (P_h, P_v):
-            row[H], row[V] = row[H] + dt * row[V] - c * row[BA], row[V] - e * row[BA]
+        x, P = predict_height_and_speed(self.x, self.P, dt, a_in, BA)
+        P_h, P_v = P[H], P[V]
         noise = self.sensor_noise["acc"] if self.acc_check is None else self.acc_check.noise
         scale = 1.0 if self.motion_noise is None else self.motion_noise.scale
         q = noise**2 * max(dt, self._acc_period) if acc_on else p.accel_psd * scale

@@ -148,6 +148,35 @@ def predict_constant_acceleration(x: Vector, P: Matrix, dt: float, Q: Matrix,
     return x_new, rows
 
 
+def predict_height_and_speed(x: Vector, P: Matrix, dt: float, acceleration: float,
+                             bias: int) -> tuple[list[float], list[list[float]]]:
+    """x⁻ = F x + B a and F P Fᵀ in the rows of h and v, without Q, for states 0 and 1 the
+    height h and vertical speed v driven by a measured ``acceleration`` a less the bias
+    state ``bias`` (b, the other states constant):
+
+        h⁻ = h + dt v + dt²/2 (a - b),   v⁻ = v + dt (a - b)
+
+    F differs from I in the rows of h and v only (∂h⁻/∂b = -dt²/2, ∂v⁻/∂b = -dt): rows h and
+    v of F P, then their entries in columns h and v of (F P) Fᵀ. The other rows' entries in
+    columns h and v are left as P had them: the caller adds Q to rows h and v and then
+    mirrors those rows into columns h and v (P⁻ symmetric). Returns x⁻ and that P."""
+    P_new = list(map(list, P))
+    c = 0.5 * dt * dt                                 # ∂h⁻/∂(-b)
+    e = dt                                            # ∂v⁻/∂(-b)
+    a = acceleration - x[bias]
+    x_new = [x[0] + dt * x[1] + 0.5 * dt * dt * a, x[1] + dt * a]
+    for k in range(2, len(x)):
+        x_new.append(x[k])
+    P_h, P_v, P_b = P_new[0], P_new[1], P_new[bias]
+    for j in range(len(P_h)):                         # rows h and v of F P, in place
+        p1, p2 = P_v[j], P_b[j]
+        P_h[j] = P_h[j] + dt * p1 - c * p2
+        P_v[j] = p1 - e * p2
+    for row in (P_h, P_v):                            # (F P) Fᵀ in columns h and v
+        row[0], row[1] = row[0] + dt * row[1] - c * row[bias], row[1] - e * row[bias]
+    return x_new, P_new
+
+
 def constant_states_noise(Q: Matrix, variances: Sequence[float]) -> tuple[tuple[float, ...], ...]:
     """``Q`` (n x n) extended by states that are constant up to independent random walks
     whose variances over the step are ``variances`` (a block diagonal Q)."""
