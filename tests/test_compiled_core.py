@@ -144,3 +144,23 @@ def test_a_source_mypy_rejects_fails_the_compilation_naming_the_error(tmp_path):
     with pytest.raises(CompileError, match=r"kalman\.py:2: error: Incompatible return"):
         compile_core(folder.parent)
     assert stale_sources(folder) is None
+
+
+@pytest.mark.parametrize("pure", [False, True])
+def test_the_command_line_says_whether_the_kalman_steps_run_compiled(pure):
+    """``altfusion --version``: the core version, the Python, and which Kalman steps a
+    campaign started here would run (the environment variable forces the sources)."""
+    if not pure and stale_sources(ESTIMATORS) != []:
+        pytest.skip("nothing compiled for this interpreter (python build_fmu.py compiles)")
+    environment = {**os.environ, PURE_PYTHON: "1" if pure else ""}
+    done = subprocess.run([sys.executable, "-c",
+                           "from altfusion.cli import main; main(['--version'])"],
+                          env=environment, capture_output=True, text=True, check=False)
+    assert done.returncode == 0, done.stderr
+    from altfusion.version import CORE_VERSION
+
+    line = done.stdout.strip()
+    assert line.startswith(f"altfusion {CORE_VERSION}, Python {sys.version.split()[0]}, ")
+    assert line.endswith("Kalman steps: " + (
+        "Python sources (python build_fmu.py compiles them for this Python)" if pure
+        else "compiled (mypyc)"))
