@@ -16,7 +16,6 @@ with fmpy's validator and each SSP against the SSP 1.0 schema; any problem fails
 """
 
 import argparse
-import os
 import sys
 from pathlib import Path
 
@@ -71,9 +70,9 @@ def stale(script: Path, fmu: Path) -> bool:
 
 def stage_core() -> Path:
     """The private copy of the core every FMU bundles (``altfusion.fmi.bundle``), its hot
-    modules compiled (``altfusion.fmi.compile_core``)."""
+    modules compiled (``altfusion.compile_core``)."""
+    from altfusion.compile_core import compile_core
     from altfusion.fmi.bundle import stage_core as stage
-    from altfusion.fmi.compile_core import compile_core
     from altfusion.version import CORE_VERSION
 
     core = stage(CORE, slave_scripts(), CORE_VERSION, STAGE)
@@ -194,15 +193,25 @@ def main(argv: list[str] | None = None) -> int:
                         help="rerun the reference plots of the FMU pages and the replay of "
                              "docs/replay.md (about 1 min)")
     args = parser.parse_args(argv)
+    # The in-process core is compiled before anything here imports the estimators (the slave
+    # scripts do), so that this process runs them compiled too.
+    from altfusion.compile_core import CompileError, compile_core, outdated
     from altfusion.compiled import FOLDER
-    from altfusion.fmi.compile_core import CompileError, compile_core, outdated
+
+    late = [f"{(p / FOLDER).relative_to(HERE)}" for p in outdated(CORE)]
+    if not args.check:
+        try:
+            for package in compile_core(CORE):
+                print(f"compiled {(package / FOLDER).relative_to(HERE)}")
+        except CompileError as error:
+            print(f"error: {error}", file=sys.stderr)
+            return 1
     from altfusion.fmi.shim import ShimBuildError, compile_shim
 
     scripts = slave_scripts()
     targets = {script: MODELS / f"{model_name(script)}.fmu" for script in scripts}
     if args.check:
-        late = [f"models/{fmu.name}" for script, fmu in targets.items() if stale(script, fmu)]
-        late += [f"{(p / FOLDER).relative_to(HERE)}" for p in outdated(CORE)]
+        late += [f"models/{fmu.name}" for script, fmu in targets.items() if stale(script, fmu)]
         for name in late:
             print(f"out of date: {name}")
         return 1 if late else 0
@@ -210,8 +219,6 @@ def main(argv: list[str] | None = None) -> int:
     problems = []
     core = shim = None
     try:
-        for package in compile_core(CORE):
-            print(f"compiled {(package / FOLDER).relative_to(HERE)}")
         for script, fmu in targets.items():
             if args.force or stale(script, fmu):
                 print(f"building models/{fmu.name}")
@@ -234,9 +241,4 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    # The build runs on the sources it compiles (the same bits): no warning that the compiled
-    # modules are older than the sources it is about to compile (altfusion.compiled).
-    from altfusion.compiled import PURE_PYTHON
-
-    os.environ.setdefault(PURE_PYTHON, "1")
     sys.exit(main())

@@ -1,6 +1,6 @@
 """The core's hot modules compiled to C by mypyc, used only while they match their sources.
 
-:data:`COMPILED` names the modules ``build_fmu.py`` compiles (``altfusion.fmi.compile_core``)
+:data:`COMPILED` names the modules ``build_fmu.py`` compiles (:mod:`altfusion.compile_core`)
 into a folder ``_compiled`` of their package, for the interpreter that runs the build: the
 in-process core's own copy and every FMU's private copy of the core get theirs. A package
 whose modules may run compiled puts that folder first on its ``__path__``

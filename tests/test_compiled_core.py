@@ -14,11 +14,12 @@ import os
 import subprocess
 import sys
 import warnings
+from importlib import import_module
 from pathlib import Path
 
 import pytest
 
-import altfusion.estimators.kalman as kalman
+import altfusion
 from altfusion.compiled import (
     COMPILED,
     FOLDER,
@@ -31,21 +32,30 @@ from altfusion.compiled import (
 )
 
 TESTS = Path(__file__).resolve().parent
-ESTIMATORS = Path(kalman.__file__).resolve().parent
-ESTIMATORS = ESTIMATORS.parent if ESTIMATORS.name == FOLDER else ESTIMATORS
+CORE = Path(altfusion.__file__).parent
 
 
-def test_the_estimators_step_on_the_compiled_modules_after_the_build():
+def compiled_here(package: str) -> bool:
+    """Whether the build compiled ``package`` for this interpreter and the sources are not
+    forced (otherwise the compiled path cannot be checked here)."""
+    return stale_sources(CORE / package) is not None and \
+        os.environ.get(PURE_PYTHON, "") in ("", "0")
+
+
+@pytest.mark.parametrize("package", sorted(COMPILED))
+def test_the_estimators_step_on_the_compiled_modules_after_the_build(package):
     """With a compilation for this interpreter that matches the sources (what ``build_fmu.py``
-    leaves, ``build_fmu.py --check`` fails otherwise), ``kalman`` is the extension module."""
-    stale = stale_sources(ESTIMATORS)
-    if stale is None or os.environ.get(PURE_PYTHON, "") not in ("", "0"):
+    leaves, ``build_fmu.py --check`` fails otherwise), every module of :data:`COMPILED` is
+    the extension module in the package's compiled folder."""
+    if not compiled_here(package):
         pytest.skip("nothing compiled for this interpreter (python build_fmu.py compiles) "
                     f"or {PURE_PYTHON} set")
+    stale = stale_sources(CORE / package)
     assert stale == [], f"{stale} changed since compiled: run python build_fmu.py"
-    assert is_compiled(kalman), kalman.__file__
-    assert Path(kalman.__file__).parent == ESTIMATORS / FOLDER
-    assert set(COMPILED["estimators"]) == {"kalman"}
+    for name in COMPILED[package]:
+        module = import_module(f"altfusion.{package}.{name}")
+        assert is_compiled(module), module.__file__
+        assert Path(module.__file__).parent == CORE / package / FOLDER
 
 
 @pytest.fixture
@@ -136,7 +146,7 @@ def test_the_python_sources_give_every_recorded_checksum():
 def test_a_source_mypy_rejects_fails_the_compilation_naming_the_error(tmp_path):
     """compile_core on a core whose compiled module does not type-check: a CompileError
     quoting mypy's message with the file and line, and nothing left to be used."""
-    from altfusion.fmi.compile_core import CompileError, compile_core
+    from altfusion.compile_core import CompileError, compile_core
 
     folder = tmp_path / "altfusion_broken" / "estimators"
     folder.mkdir(parents=True)
@@ -150,7 +160,8 @@ def test_a_source_mypy_rejects_fails_the_compilation_naming_the_error(tmp_path):
 def test_the_command_line_says_whether_the_kalman_steps_run_compiled(pure):
     """``altfusion --version``: the core version, the Python, and which Kalman steps a
     campaign started here would run (the environment variable forces the sources)."""
-    if not pure and stale_sources(ESTIMATORS) != []:
+    if not pure and not (compiled_here("estimators")
+                         and stale_sources(CORE / "estimators") == []):
         pytest.skip("nothing compiled for this interpreter (python build_fmu.py compiles)")
     environment = {**os.environ, PURE_PYTHON: "1" if pure else ""}
     done = subprocess.run([sys.executable, "-c",

@@ -1,6 +1,7 @@
 """Compile the core's hot modules (:data:`altfusion.compiled.COMPILED`) with mypyc.
 
-``build_fmu.py`` compiles them for the interpreter running it, into the folder
+``build_fmu.py`` compiles them for the interpreter running it, before it imports the
+estimators (so that it runs them compiled, and warns of no stale compilation), into the folder
 :data:`~altfusion.compiled.FOLDER` of their package: once in the in-process core (the
 package's own folder, ignored by git) and once in the private copy every FMU bundles (whose
 module names differ, and a compiled module knows its name). Each compilation runs in a
