@@ -5,8 +5,9 @@ estimators (so that it runs them compiled, and warns of no stale compilation), i
 :data:`~altfusion.compiled.FOLDER` of their package: once in the in-process core (the
 package's own folder, ignored by git) and once in the private copy every FMU bundles (whose
 module names differ, and a compiled module knows its name). Each compilation runs in a
-scratch folder holding only the modules compiled, under their package's name, so mypy checks
-them alone; the extension modules and the manifest that lets
+scratch copy of the core's Python sources, so that mypy sees what the compiled modules
+import, but checks only them (``--follow-imports=silent``: the modules left interpreted are
+read for their types, not judged); the extension modules and the manifest that lets
 :func:`altfusion.compiled.compiled_path` trust them are then moved into place. The C compiler
 is the one setuptools uses (``$CC``, default ``cc``), with ``-ffp-contract=off`` added: a
 multiply and an add stay two roundings, as in Python, on processors with fused multiply-adds
@@ -68,17 +69,15 @@ def compile_package(core_name: str, folder: Path, modules: tuple[str, ...]) -> N
     package = f"{core_name}.{folder.name}"
     with tempfile.TemporaryDirectory() as scratch:
         root = Path(scratch)
+        shutil.copytree(folder.parent, root / core_name,
+                        ignore=shutil.ignore_patterns(FOLDER, "__pycache__", "*.so", "*.pyd"))
         target = root / core_name / folder.name
-        target.mkdir(parents=True)
-        for init in (root / core_name / "__init__.py", target / "__init__.py"):
-            init.touch()
-        for module in modules:
-            shutil.copyfile(folder / f"{module}.py", target / f"{module}.py")
         paths = [f"{core_name}/{folder.name}/{module}.py" for module in modules]
         environment = {**os.environ,
                        "CFLAGS": f"{os.environ.get('CFLAGS', '')} -ffp-contract=off".strip()}
         done = subprocess.run([sys.executable, "-c", _SETUP,
-                               json.dumps([paths, f"{package}.{GROUP}"])],
+                               json.dumps([[*paths, "--follow-imports=silent"],
+                                           f"{package}.{GROUP}"])],
                               cwd=root, env=environment, capture_output=True, text=True,
                               check=False)
         if done.returncode != 0:

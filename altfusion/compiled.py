@@ -25,9 +25,17 @@ import sys
 import warnings
 from pathlib import Path
 
-COMPILED = {"estimators": ("kalman",)}
+COMPILED = {"estimators": ("kalman", "restorable", "aid_source", "fault_detection", "stuck",
+                            "noise_check", "prediction_judges", "accelerometer_check",
+                            "process_noise", "range_aid", "ground_range",
+                            "reference_handover")}
 """Package (relative to the core) -> its modules compiled by mypyc: the Kalman steps every
-estimator runs (typed; no classes, so FMU states hold nothing compiled)."""
+estimator runs and the machinery its members are made of (one aid source per sensor stream,
+the fault layer's tests and checks), typed. Their classes, native classes once compiled,
+derive from :class:`~altfusion.estimators.restorable.Restorable` (the FMU state codec makes
+them blank). The estimators' own classes are not compiled: they are mixins
+(:class:`~altfusion.estimators.intake.SampleIntake`, ...), which mypyc's native classes
+cannot be."""
 FOLDER = "_compiled"
 """The folder of a package's compiled modules."""
 MANIFEST = "manifest.json"
@@ -50,7 +58,8 @@ def manifest_for(package_dir: Path, modules: tuple[str, ...]) -> dict:
 
 def stale_sources(package_dir: Path) -> list[str] | None:
     """The sources of the package at ``package_dir`` edited since they were compiled for this
-    interpreter ([] when all match); None when nothing was compiled for it."""
+    interpreter, or listed in :data:`COMPILED` since and not compiled ([] when all match);
+    None when nothing was compiled for it."""
     try:
         manifest = json.loads((package_dir / FOLDER / MANIFEST).read_text())
     except (OSError, ValueError):
@@ -58,9 +67,11 @@ def stale_sources(package_dir: Path) -> list[str] | None:
     if not isinstance(manifest, dict) or manifest.get("cache_tag") != \
             sys.implementation.cache_tag or not isinstance(manifest.get("sources"), dict):
         return None
-    return [name for name, digest in sorted(manifest["sources"].items())
-            if not (package_dir / name).is_file()
-            or source_sha256(package_dir / name) != digest]
+    digests = manifest["sources"]
+    listed = {f"{module}.py" for module in COMPILED.get(package_dir.name, ())}
+    return sorted(name for name in listed | digests.keys()
+                  if not (package_dir / name).is_file() or name not in digests
+                  or source_sha256(package_dir / name) != digests[name])
 
 
 def compiled_path(package_dir: str) -> list[str]:

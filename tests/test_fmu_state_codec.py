@@ -6,7 +6,15 @@ import re
 import pytest
 
 from altfusion.estimators.health import Status
-from altfusion.fmi.state import StateError, StateHeader, assemble, check_like, dump, load
+from altfusion.fmi.state import (
+    StateError,
+    StateHeader,
+    assemble,
+    check_like,
+    dump,
+    load,
+    read_header,
+)
 
 HEADER = StateHeader("Model", "guid", "0.1.0+x")
 
@@ -111,3 +119,41 @@ def test_every_estimators_state_of_one_time_is_a_state_of_its_kind_at_another():
     for (saved, restored), name in itertools.product(itertools.permutations(states, 2),
                                                      estimators):
         check_like(load(dump(HEADER, states[saved][name]), HEADER), states[restored][name])
+
+
+def test_the_compiled_machinery_round_trips_as_itself():
+    """An aid source with its bias window, stuck checks and noise check (native classes of
+    mypyc where the build compiled them, Python classes otherwise): rebuilt blank, without
+    ``__init__``, as the same classes with every field as saved; a field of another type in
+    the bytes is refused (by the native class when compiled, by check_like either way)."""
+    import altfusion.estimators.aid_source as aid_source
+    from altfusion.compiled import is_compiled
+    from altfusion.estimators.noise_check import ShownNoise
+    from altfusion.estimators.stuck import StuckReadings
+
+    source = aid_source.AidSource("baro")
+    source.shown = ShownNoise(source)
+    for now, y in enumerate((0.5, -0.25, 1.5)):
+        source.window.add(float(now), y, 0.04, 10.0)
+        source.shown.gated(y, 0.04, 0.01)
+    source.refused()
+    stuck = StuckReadings(("baro", "gps"), 5)
+    stuck.checks["gps"].stuck(12.0, 1.0)
+    state = {"source": source, "stuck": stuck}
+    restored = load(dump(HEADER, state), HEADER)
+    check_like(restored, state)
+    copy = restored["source"]
+    assert type(copy) is aid_source.AidSource and copy is not source
+    assert hasattr(aid_source.AidSource, "__mypyc_attrs__") == is_compiled(aid_source)
+    assert copy.shown.source is copy                    # the sharing survives
+    for name in ("test_ratio", "rejected", "bits", "innovation", "last_gated"):
+        assert getattr(copy, name) == getattr(source, name), name
+    assert list(copy.window.samples) == list(source.window.samples)
+    assert (copy.window.sum_y, copy.window.sum_S) == (source.window.sum_y, source.window.sum_S)
+    assert (copy.shown.ratio, copy.shown.pairs) == (source.shown.ratio, source.shown.pairs)
+    assert restored["stuck"].checks["gps"].last == 12.0
+
+    tree = json.loads(read_header(dump(HEADER, state))[1])
+    tree["v"][0][1]["v"]["rejected"] = "one"             # source.rejected: an int
+    with pytest.raises(StateError, match="rejected"):
+        check_like(load(assemble(HEADER, json.dumps(tree).encode()), HEADER), state)

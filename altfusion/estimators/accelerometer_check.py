@@ -74,6 +74,7 @@ from altfusion.estimators.aid_source import AidSource
 from altfusion.estimators.fault_detection import BIAS_MIN_SAMPLES
 from altfusion.estimators.noise_check import UNSTATED_RANGE
 from altfusion.estimators.prediction_judges import Judgement, inconsistent
+from altfusion.estimators.restorable import Restorable
 from altfusion.estimators.streams import ACC_CLIP
 
 PERIOD = 0.1
@@ -145,7 +146,7 @@ random-walk acceleration, scatters more (at most 0.032). So an accelerometer is 
 once it is 3x noisier than stated."""
 
 
-class AccelerometerCheck:
+class AccelerometerCheck(Restorable):
     """The ``bad_acc_vertical`` condition of one estimator's accelerometer, and the noise to
     use for it (:attr:`noise`): its stated noise while good."""
 

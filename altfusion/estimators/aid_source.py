@@ -11,6 +11,7 @@ struct here, with the bias-test window and the isolation state of the fault laye
 import math
 from collections import deque
 from enum import Enum
+from typing import Any
 
 from altfusion.estimators.health import (
     HEIGHT_SOURCES,
@@ -18,13 +19,14 @@ from altfusion.estimators.health import (
     SourceBit,
     source_bit,
 )
+from altfusion.estimators.restorable import Restorable
 
 MAX_WINDOW_VALUE = 1e100
 """Innovations and variances entering a bias window are clipped to this magnitude, so that
 its running sums stay finite."""
 
 
-class InnovationWindow:
+class InnovationWindow(Restorable):
     """A height source's innovations y and their variances S over a span of time, with
     running sums: the mean ȳ = Σy/n and its variance ΣS/n² + :attr:`shared` (independent
     samples, but for the error they share)."""
@@ -98,7 +100,7 @@ FUSED = Verdict.FUSED
 through its class takes the metaclass's slow attribute lookup (~0.1 µs), a global does not."""
 
 
-class AidSource:
+class AidSource(Restorable):
     """The state of one source (``baro``, ``gps``, ``radar``, ``laser``, ``gps_vz``,
     ``acc``) of an estimator: its last sample's gating, its counters and its health."""
 
@@ -140,7 +142,7 @@ class AidSource:
         """Its noise is still being learnt, found well above the stated or not stated
         (:mod:`~altfusion.estimators.noise_check`): its rejections may be its noise's, so it
         is neither isolated nor rejected by the bias test for them."""
-        self.shown = None
+        self.shown: Any = None                    # (noise_check imports this module)
         """The fault layer's check of a paper filter's stated noise against its innovations
         (:class:`~altfusion.estimators.noise_check.ShownNoise`; None: unchecked, or checked
         by the estimator itself)."""

@@ -63,6 +63,8 @@ ground from a dropout.
 
 import math
 
+from altfusion.estimators.restorable import Restorable
+
 PRESUMED_SIGMA = 2.0
 """Standard deviations of the height above the terrain that must stay within the laser's
 reach while the vehicle is presumed on the ground (one-sided 97.7 %; the gate's otherwise)."""
@@ -72,7 +74,7 @@ LANDED_SPEED = 0.5
 land detector, LNDMC_Z_VEL_MAX's default)."""
 
 
-class GroundRange:
+class GroundRange(Restorable):
     """The on-ground reading of a laser of minimum range ``minimum`` and maximum height
     ``maximum`` (m), judged with the estimator's gate of ``gate`` standard deviations."""
 

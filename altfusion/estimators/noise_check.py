@@ -114,6 +114,7 @@ from functools import cache
 from statistics import NormalDist
 
 from altfusion.estimators.aid_source import AidSource
+from altfusion.estimators.restorable import Restorable
 
 CLIP = 25.0
 """Largest contribution of one pair of innovations to the ratio (the square of the 5σ gate:
@@ -190,7 +191,7 @@ def lower_bound_factor(dof: int) -> float:
     return dof / chi2_quantile(dof, CONFIDENCE)
 
 
-class NoiseCheck:
+class NoiseCheck(Restorable):
     """The noise factor of one source: :attr:`factor` multiplies its stated variance R."""
 
     __slots__ = ("source", "window", "maximum", "minimum", "stated", "flagged", "ratio",
@@ -238,7 +239,7 @@ class NoiseCheck:
         if self.stated:
             last = self._last
             pair = self._pair(innovation, variance, CLIP, noise)
-            if pair is None:
+            if pair is None or last is None:
                 return
             pairs = min(self.pairs, self.window)
             self.ratio += (pair * self.factor - self.ratio) / pairs

@@ -75,6 +75,7 @@ import math
 
 from altfusion.estimators.aid_source import AidSource
 from altfusion.estimators.prediction_judges import MIN_SOURCES, Judgement, inconsistent, judge
+from altfusion.estimators.restorable import Restorable
 
 PERIOD = 0.1
 """The prediction is judged at most this often, s (at every estimator step when that is
@@ -136,7 +137,7 @@ def maximum_scale(stated_psd: float, max_acceleration: float) -> float:
     return max(1.0, max_acceleration**2 * REFERENCE_PERIOD / stated_psd)
 
 
-class _Evidence:
+class _Evidence(Restorable):
     """One judge's fading innovation mean, the variance that mean would have if the
     prediction were right, and the fading mean square of its successive differences."""
 
@@ -164,7 +165,7 @@ class _Evidence:
         self.last, self.time = y, now
 
 
-class MotionNoise:
+class MotionNoise(Restorable):
     """The factor on an estimator's motion-model noise (:attr:`scale`), from the innovations
     of its ``judges``."""
 

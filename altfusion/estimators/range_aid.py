@@ -51,6 +51,7 @@ Deviations from PX4 EKF2:
 import math
 
 from altfusion.estimators.aid_source import AidSource
+from altfusion.estimators.restorable import Restorable
 
 RATE_SPAN = 0.2
 """Shortest time between the two samples of a range rate, s: a 5 mm laser's rate is then
@@ -80,7 +81,7 @@ STALE = 1.0
 range), s."""
 
 
-class RangeConsistency:
+class RangeConsistency(Restorable):
     """PX4's kinematic consistency of one rangefinder: its rate against the vertical speed."""
 
     __slots__ = ("source", "ratio", "in_limit", "_anchor")
@@ -123,7 +124,7 @@ class RangeConsistency:
         return abs(self.ratio) < GATE
 
 
-class RangeAid:
+class RangeAid(Restorable):
     """The conditional range aid of one estimator over its rangefinders."""
 
     __slots__ = ("max_height", "hysteresis", "checks", "heights", "active", "_since")
@@ -169,7 +170,8 @@ class RangeAid:
                     check.restart()
         elif self._since is None:
             self._since = now
-        active = holds and now - self._since >= HOLD
+        since = self._since
+        active = since is not None and now - since >= HOLD       # (None unless it holds)
         changed = active != self.active
         self.active = active
         return changed

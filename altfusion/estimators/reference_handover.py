@@ -41,6 +41,7 @@ from collections.abc import Iterable, Mapping
 
 from altfusion.estimators.aid_source import AidSource, InnovationWindow
 from altfusion.estimators.fault_detection import BIAS_MIN_SAMPLES, BIAS_SIGMAS, agrees
+from altfusion.estimators.restorable import Restorable
 
 SPAN = 30.0
 """The long window, s: a 10 m shift of a 30 m GNSS at 10 Hz is 5.8 standard deviations of
@@ -56,7 +57,7 @@ REFERENCE = "gps"
 """The source whose shift is judged: the GNSS height reference."""
 
 
-class ReferenceHandover:
+class ReferenceHandover(Restorable):
     """The long innovation windows of the GNSS reference and of the estimator's
     rangefinders."""
 

@@ -41,6 +41,7 @@ import math
 from collections.abc import Callable, Iterable
 
 from altfusion.estimators.aid_source import AidSource
+from altfusion.estimators.restorable import Restorable
 
 VEHICLE_MOVING = 0.05
 """The slowest climb or descent (m/s) the baro's heights must show, beyond their scatter, for a
@@ -57,7 +58,7 @@ long wait on the ground shows within about one span (a least-squares slope over 
 rest and τ s of climb at r is only ~3rτ²/600², 0.05 m/s after 77 s of a 1 m/s climb)."""
 
 
-class StuckCheck:
+class StuckCheck(Restorable):
     """Whether one reading is stuck (:meth:`stuck`)."""
 
     __slots__ = ("limit", "last", "repeats", "since")
@@ -113,7 +114,7 @@ class GnssCheck(StuckCheck):
         return 3.0 * self.resolution if math.isfinite(self.resolution) else 0.0
 
 
-class HeightSlope:
+class HeightSlope(Restorable):
     """The least-squares slope of heights over a run of samples (times and heights taken
     from the run's first sample, so that the sums do not cancel)."""
 
@@ -182,7 +183,7 @@ class HeightSlope:
         self.add(t, h)
 
 
-class StuckReadings:
+class StuckReadings(Restorable):
     """The fault layer's stuck check of an estimator's readings
     (:meth:`~altfusion.estimators.intake.SampleIntake.due_samples`): a :class:`StuckCheck` per
     source, the GNSS receiver's heights while its vertical speed reads exactly 0, the baro's

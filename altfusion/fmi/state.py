@@ -25,8 +25,10 @@ Decoding calls no code chosen by the bytes: a class is found among the classes a
 imported from the core packages (``CORE_PACKAGES``) or the FMU's own slave script, never
 imported on demand; it must be a plain class, a dataclass, a named tuple or an enum (whose
 member is looked up by its int or str value). Objects are rebuilt with ``object.__new__``
-(or ``tuple.__new__``) and their fields written directly, without ``__init__``,
-``__setstate__`` or any other method of theirs. Bit generators are constructed
+(or ``tuple.__new__``; a :class:`~altfusion.estimators.restorable.Restorable`, which may be a
+class compiled by mypyc, with its own ``__new__``, which makes a blank instance) and their
+fields written directly, without ``__init__``, ``__setstate__`` or any other method of
+theirs. Bit generators are constructed
 from numpy's own classes and given their state through numpy's setter. Anything else is a
 :class:`StateError` naming the reason.
 """
@@ -44,6 +46,8 @@ from typing import Any
 
 import numpy as np
 
+from altfusion.estimators.restorable import Restorable
+
 MAGIC = b"ALTFSTAT"
 FORMAT_VERSION = 1
 _PREFIX = struct.Struct(">8sHI")
@@ -59,6 +63,8 @@ CORE_PACKAGES = tuple(f"{_PACKAGE}.{name}" for name in (
 _BIT_GENERATORS = {cls.__name__: cls for cls in
                    (np.random.PCG64, np.random.PCG64DXSM, np.random.MT19937,
                     np.random.Philox, np.random.SFC64)}
+_NATIVE_FIELDS = "__mypyc_attrs__"
+"""The attribute of a class compiled by mypyc naming its instances' native attributes."""
 _ARRAY_KINDS = "biufc"
 """numpy dtype kinds a state may hold: booleans, integers, floats, complex (never objects)."""
 
@@ -242,7 +248,8 @@ def _is_data_object(value: Any) -> bool:
     """An object whose attributes a state holds (not a container, number or array)."""
     return not isinstance(value, (str, bytes, set, frozenset, enum.Enum, fractions.Fraction,
                                   np.generic, np.random.Generator)) and (
-        hasattr(value, "__dict__") or hasattr(type(value), "__slots__"))
+        hasattr(value, "__dict__") or hasattr(type(value), "__slots__")
+        or hasattr(type(value), _NATIVE_FIELDS))
 
 
 # ----------------------------------------------------------------------------- encoding
@@ -256,12 +263,14 @@ def _is_named_tuple(cls: type) -> bool:
 
 
 def _object_fields(obj: Any) -> dict[str, Any]:
-    """An object's instance attributes: its ``__dict__`` and any named slots."""
+    """An object's instance attributes: its ``__dict__``, any named slots and, for a class
+    compiled by mypyc, its native attributes (those set)."""
     fields = dict(getattr(obj, "__dict__", {}))
-    for klass in type(obj).__mro__:
-        for name in klass.__dict__.get("__slots__", ()):
-            if name not in ("__dict__", "__weakref__") and hasattr(obj, name):
-                fields[name] = getattr(obj, name)
+    kind = type(obj)
+    names = [name for klass in kind.__mro__ for name in klass.__dict__.get("__slots__", ())]
+    for name in (*names, *getattr(kind, _NATIVE_FIELDS, ())):
+        if name not in ("__dict__", "__weakref__") and hasattr(obj, name):
+            fields[name] = getattr(obj, name)
     return fields
 
 
@@ -353,7 +362,7 @@ def _allowed_class(name: Any, own_module: str) -> type:
         raise StateError(f"class {name!r} is not a core class of this FMU")
     if _is_named_tuple(cls) or issubclass(cls, enum.Enum):
         return cls
-    if cls.__new__ is not object.__new__:
+    if cls.__new__ is not object.__new__ and not issubclass(cls, Restorable):
         raise StateError(f"class {name!r} has its own __new__")
     return cls
 
@@ -422,11 +431,16 @@ class _Decoder:
             return tuple.__new__(cls, [self.decode(v) for v in tree["v"]])
         if tag == "object":
             cls = _allowed_class(tree["class"], self._own_module)
-            obj = self._register(tree, object.__new__(cls))
+            blank = cls.__new__(cls) if issubclass(cls, Restorable) else object.__new__(cls)
+            obj = self._register(tree, blank)
             for name, value in tree["v"].items():
                 if name.startswith("__") and name.endswith("__"):
                     raise StateError(f"attribute {name!r} of {tree['class']!r} refused")
-                object.__setattr__(obj, str(name), self.decode(value))
+                try:
+                    object.__setattr__(obj, str(name), self.decode(value))
+                except (TypeError, AttributeError) as error:     # a native class's own check
+                    raise StateError(f"field {name!r} of {tree['class']!r} refused: "
+                                     f"{error}") from None
             return obj
         raise StateError(f"corrupted state body (unknown tag {tag!r})")
 
