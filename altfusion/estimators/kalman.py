@@ -12,14 +12,20 @@ and later, without on Sandy Bridge), so that an estimator stepped on arrays give
 on another machine. Python's float operations are IEEE 754's, rounded once each, on every
 machine. The array forms are the tests' reference (``tests/kalman_reference.py``): every
 form here equals them to rounding, some bit for bit (tests/test_kalman.py).
+
+The module is compiled by mypyc (:mod:`altfusion.compiled`). The updates and the sparse
+prediction copy what they read into lists of their annotated types (P's rows, H's terms,
+x) and loop over indices: compiled, such a loop reads unboxed floats from a list directly,
+where the same loop over a ``Sequence``, or a ``map`` over ``operator`` functions, calls
+back into the interpreter for every element; interpreted, the copies cost a C-level
+``list()`` each.
 """
 # ruff: noqa: B905  (the scalar forms zip sequences of equal lengths by construction; a
 # zip(..., strict=...) is a keyword call, which costs more than a short row's arithmetic)
 
 import math
 from collections.abc import Iterable, Sequence
-from itertools import repeat
-from operator import add, mul, truediv
+from operator import add
 
 # ----------------------------------------------------------------- scalar arithmetic
 Vector = Sequence[float]
@@ -207,7 +213,7 @@ def rederive(P, index: int, H: Sequence[tuple[int, float]], variance: float) -> 
     the other states (H does not involve ``index``) plus an independent error of
     ``variance`` (a reset onto a measurement of a difference of states):
     Cov(x_index, x) = P Hᵀ and Var(x_index) = H P Hᵀ + variance."""
-    cross = _times_row(P, H)
+    cross = _times_row(P, list(H))
     for j, c in enumerate(cross):
         P[index][j] = P[j][index] = c
     P[index][index] = sparse_dot(cross, H) + variance
@@ -268,8 +274,9 @@ def quadratic_form(P: Matrix, H: Sequence[tuple[int, float]]) -> float:
     return total
 
 
-def predict_sparse(x: Vector, P: Matrix, F: Sequence[Sequence[tuple[int, float]]], Q: Matrix,
-                   Bu: Vector | None = None) -> tuple[list[float], list[list[float]]]:
+def predict_sparse(x: Vector, P: list[list[float]], F: Sequence[Sequence[tuple[int, float]]],
+                   Q: Matrix, Bu: Vector | None = None,
+                   ) -> tuple[list[float], list[list[float]]]:
     """The time update for a transition matrix F given as sparse rows (each a tuple of
     (state index, coefficient) pairs), in scalar arithmetic: x⁻ = F x + B u, P⁻ = F P Fᵀ + Q
     (``Bu``: B u, or None for none).
@@ -277,21 +284,22 @@ def predict_sparse(x: Vector, P: Matrix, F: Sequence[Sequence[tuple[int, float]]
     Row a of F P is P Fₐᵀ (P symmetric), each entry of F P Fᵀ a sparse sum of that row:
     the work grows with F's non-zero entries, not with n³. The upper triangle is computed and
     mirrored, so that P⁻ is exactly symmetric (P and Q must be symmetric)."""
-    FP = [_times_row(P, F_a) for F_a in F]
-    n = len(F)
-    P_new = list(map(list, Q))
+    x_old, terms = list(x), list(map(list, F))
+    FP = [_times_row(P, F_a) for F_a in terms]
+    n = len(terms)
+    P_new = _rows(Q)
     for a in range(n):                    # plain loops (a comprehension's frame costs more)
         FP_a, P_a = FP[a], P_new[a]
         for b in range(a, n):
-            total = 0.0                   # sparse_dot(FP_a, F[b]), written out
-            for i, f in F[b]:
+            total = 0.0                   # _dot(FP_a, terms[b]), written out
+            for i, f in terms[b]:
                 total += f * FP_a[i]
             P_a[b] = P_new[b][a] = total + P_a[b]
-    x_new = []
-    for F_a in F:
-        total = 0.0                       # sparse_dot(x, F_a)
+    x_new: list[float] = []
+    for F_a in terms:
+        total = 0.0                       # _dot(x_old, F_a)
         for i, f in F_a:
-            total += f * x[i]
+            total += f * x_old[i]
         x_new.append(total)
     return (x_new if Bu is None else list(map(add, x_new, Bu))), P_new
 
@@ -311,13 +319,19 @@ def update_scalar(x: Vector, P: Matrix, H: Sequence[tuple[int, float]], innovati
     so it stays exact for a gain scaled by a weight α = ``gain_scale`` (xu2016 eq. 26). P
     must be symmetric (its upper triangle is read) and stays exactly so (each entry's sum
     is the same float for (a, b) and (b, a))."""
-    row = _times_row(P, H)
-    S = sparse_dot(row, H) + variance
+    P_new, terms = _rows(P), list(H)
+    row = _times_row(P_new, terms)
+    S = _dot(row, terms) + variance
+    K: list[float] = []
     if gain_scale == 1.0:
-        K = list(map(truediv, row, repeat(S)))                     # r / S, without a frame
+        for r in row:
+            K.append(r / S)
     else:
-        K = list(map(mul, row, repeat(gain_scale / S)))
-    return (*_gain_step(x, P, row, K, S, innovation), S)
+        scale = gain_scale / S
+        for r in row:
+            K.append(r * scale)
+    x_new, P_new = _gain_step(list(x), P_new, row, K, S, innovation)
+    return x_new, P_new, S
 
 
 def update_scalar_of(x: Vector, P: Matrix, H: Sequence[tuple[int, float]], innovation: float,
@@ -330,58 +344,64 @@ def update_scalar_of(x: Vector, P: Matrix, H: Sequence[tuple[int, float]], innov
         K_i = r_i / S for i in states, 0 otherwise;  P = P⁻ - (K rᵀ + r Kᵀ) + S K Kᵀ
 
     the Joseph form, right for any gain. P stays exactly symmetric."""
-    row = _times_row(P, H)
-    S = sparse_dot(row, H) + variance
-    K = [0.0] * len(x)
+    P_new, terms = _rows(P), list(H)
+    row = _times_row(P_new, terms)
+    S = _dot(row, terms) + variance
+    K = [0.0] * len(row)
     for i in states:
         K[i] = row[i] / S
-    return _gain_step(x, P, row, K, S, innovation)
+    return _gain_step(list(x), P_new, row, K, S, innovation)
 
 
-def _gain_step(x: Vector, P: Matrix, row: list[float], K: list[float], S: float,
-               innovation: float) -> tuple[list[float], list[list[float]]]:
-    """x + K y and the Joseph form P - (K rᵀ + r Kᵀ) + S K Kᵀ of a scalar update of gain K
-    (r = P Hᵀ, S its innovation variance) for a symmetric P: the upper triangle computed and
-    mirrored, each entry's sum being the same float for (a, b) and (b, a)."""
-    x_new = list(map(add, x, map(mul, K, repeat(innovation))))     # x + K y, without a frame
-    P_new = list(map(list, P))
-    # Plain loops over indices: at these sizes a comprehension's frame (Python 3.11) costs
-    # more than the arithmetic it saves writing out.
+def _rows(P: Matrix) -> list[list[float]]:
+    """A copy of P as a list of lists (the update writes into it)."""
+    return list(map(list, P))
+
+
+def _gain_step(x: list[float], P: list[list[float]], row: list[float], K: list[float],
+               S: float, innovation: float) -> tuple[list[float], list[list[float]]]:
+    """In place, on copies of x and P: x + K y and the Joseph form P - (K rᵀ + r Kᵀ) +
+    S K Kᵀ of a scalar update of gain K (r = P Hᵀ, S its innovation variance) for a
+    symmetric P: the upper triangle computed and mirrored, each entry's sum being the same
+    float for (a, b) and (b, a) (entry (a, b), b ≥ a, is read before anything is written
+    to it). Plain loops over indices: compiled, they run on unboxed floats; interpreted,
+    a comprehension's frame (Python 3.11) would cost more than the arithmetic it saves."""
     n = len(K)
     for a in range(n):
-        P_a, r_a, k_a, new_a = P[a], row[a], K[a], P_new[a]
+        x[a] = x[a] + K[a] * innovation
+    for a in range(n):
+        P_a, r_a, k_a = P[a], row[a], K[a]
         for b in range(a, n):
             k_b = K[b]
-            new_a[b] = P_new[b][a] = P_a[b] - (k_a * row[b] + r_a * k_b) + k_a * k_b * S
-    return x_new, P_new
+            P_a[b] = P[b][a] = P_a[b] - (k_a * row[b] + r_a * k_b) + k_a * k_b * S
+    return x, P
 
 
-def _times_row(P: Matrix, H: Sequence[tuple[int, float]]) -> list[float]:
+def _times_row(P: list[list[float]], H: list[tuple[int, float]]) -> list[float]:
     """P Hᵀ for a sparse row H: each entry the sum of H's terms from 0 in H's order (as
-    :func:`sparse_dot`), written out for rows of up to four terms (appended in loops: at
-    these sizes a comprehension's frame costs more than the arithmetic)."""
+    :func:`sparse_dot`), written out for rows of one and two terms."""
     row: list[float] = []
-    append = row.append
     if len(H) == 1:
-        (i, h), = H
+        i, h = H[0]
         for P_a in P:
-            append(0.0 + h * P_a[i])
+            row.append(0.0 + h * P_a[i])
     elif len(H) == 2:
-        (i, h), (j, g) = H
+        i, h = H[0]
+        j, g = H[1]
         for P_a in P:
-            append(0.0 + h * P_a[i] + g * P_a[j])
-    elif len(H) == 3:
-        (i, h), (j, g), (k, f) = H
-        for P_a in P:
-            append(0.0 + h * P_a[i] + g * P_a[j] + f * P_a[k])
-    elif len(H) == 4:
-        (i, h), (j, g), (k, f), (m, e) = H
-        for P_a in P:
-            append(0.0 + h * P_a[i] + g * P_a[j] + f * P_a[k] + e * P_a[m])
+            row.append(0.0 + h * P_a[i] + g * P_a[j])
     else:
         for P_a in P:
-            append(sparse_dot(P_a, H))
+            row.append(_dot(P_a, H))
     return row
+
+
+def _dot(v: list[float], H: list[tuple[int, float]]) -> float:
+    """:func:`sparse_dot` of typed lists."""
+    total = 0.0
+    for i, h in H:
+        total += h * v[i]
+    return total
 
 
 def running_sum(values: Iterable[float]) -> float:
