@@ -202,14 +202,15 @@ def command_reproduce(args: argparse.Namespace) -> int:
 
 
 def version() -> str:
-    """The core version, the interpreter, and whether the Kalman steps run compiled here
-    (:mod:`altfusion.compiled`: the same bits either way, the compiled ones faster)."""
+    """The core version, the interpreter, and whether the estimators' Kalman steps and
+    machinery run compiled here (:mod:`altfusion.compiled`: the same bits either way, the
+    compiled ones faster)."""
     modules = [import_module(f"altfusion.{package}.{name}")
                for package, names in COMPILED.items() for name in names]
     how = "compiled (mypyc)" if all(map(is_compiled, modules)) else (
         "Python sources (python build_fmu.py compiles them for this Python)")
-    return (f"altfusion {CORE_VERSION}, Python {platform.python_version()}, Kalman steps: "
-            f"{how}")
+    return (f"altfusion {CORE_VERSION}, Python {platform.python_version()}, "
+            f"estimator machinery: {how}")
 
 
 class _Version(argparse.Action):
@@ -225,8 +226,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--debug", action="store_true",
                         help="show Python tracebacks instead of one-line errors")
     parser.add_argument("--version", action=_Version, nargs=0,
-                        help="print the core version, the Python and whether the Kalman steps "
-                             "run compiled, and exit")
+                        help="print the core version, the Python and whether the estimator "
+                             "machinery runs compiled, and exit")
     commands = parser.add_subparsers(dest="command", required=True,
                                      parser_class=_Parser)
     run = commands.add_parser("run", help="co-simulate an SSP system, write CSV and a plot")

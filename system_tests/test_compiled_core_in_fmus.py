@@ -1,8 +1,8 @@
-"""Every FMU's private core carries the compiled Kalman steps for the build's interpreter and
-steps on them in a host of that interpreter; with ``ALTFUSION_PURE_PYTHON`` set, on the
-sources (:mod:`altfusion.compiled`). That the FMUs' outputs are the same bits as the sources'
-is system_tests/test_output_checksums.py's (its checksums were recorded before anything was
-compiled).
+"""Every FMU's private core carries the compiled core modules (Kalman steps, machinery) for
+the build's interpreter and steps on them in a host of that interpreter; with
+``ALTFUSION_PURE_PYTHON`` set, on the sources (:mod:`altfusion.compiled`). That the FMUs'
+outputs are the same bits as the sources' is system_tests/test_output_checksums.py's (its
+checksums were recorded before anything was compiled).
 
 Each host is a fresh interpreter, as a user's is: fmpy simulates the FMU of YangFusionKF (its
 extraction folder deleted afterwards, as fmpy does) and reports which file its core's

@@ -1,5 +1,6 @@
-"""The compiled Kalman steps (:mod:`altfusion.compiled`): used only while they match their
-sources, and the same bits as the sources.
+"""The compiled core modules, the Kalman steps and the estimators' machinery
+(:mod:`altfusion.compiled`): used only while they match their sources, and the same bits as
+the sources.
 
 ``build_fmu.py`` compiles :data:`~altfusion.compiled.COMPILED` with mypyc for the interpreter
 running it. Here: after the build, the estimators step on the compiled modules; a stale,
@@ -165,9 +166,10 @@ def test_a_source_mypy_rejects_fails_the_compilation_naming_the_error(tmp_path):
 
 
 @pytest.mark.parametrize("pure", [False, True])
-def test_the_command_line_says_whether_the_kalman_steps_run_compiled(pure):
-    """``altfusion --version``: the core version, the Python, and which Kalman steps a
-    campaign started here would run (the environment variable forces the sources)."""
+def test_the_command_line_says_whether_the_estimator_machinery_runs_compiled(pure):
+    """``altfusion --version``: the core version, the Python, and which estimator machinery
+    (compiled or its sources) a campaign started here would run (the environment variable
+    forces the sources)."""
     if not pure and not (compiled_here("estimators")
                          and stale_sources(CORE / "estimators") == []):
         pytest.skip("nothing compiled for this interpreter (python build_fmu.py compiles)")
@@ -180,6 +182,6 @@ def test_the_command_line_says_whether_the_kalman_steps_run_compiled(pure):
 
     line = done.stdout.strip()
     assert line.startswith(f"altfusion {CORE_VERSION}, Python {sys.version.split()[0]}, ")
-    assert line.endswith("Kalman steps: " + (
+    assert line.endswith("estimator machinery: " + (
         "Python sources (python build_fmu.py compiles them for this Python)" if pure
         else "compiled (mypyc)"))
