@@ -185,3 +185,31 @@ def test_the_command_line_says_whether_the_estimator_machinery_runs_compiled(pur
     assert line.endswith("estimator machinery: " + (
         "Python sources (python build_fmu.py compiles them for this Python)" if pure
         else "compiled (mypyc)"))
+
+
+@pytest.mark.parametrize("package", sorted(COMPILED))
+def test_every_class_of_a_compiled_module_can_be_made_blank(package):
+    """The FMU state codec rebuilds an object blank (``cls.__new__(cls)``) and writes its
+    fields; compiled, a class's generated ``__new__`` would run ``__init__``. So every class a
+    compiled module defines derives from Restorable (an enum is rebuilt by its value), and a
+    blank instance of it has none of its fields set, whether the module runs compiled or
+    from its source."""
+    import enum
+    import inspect
+
+    from altfusion.estimators.restorable import Restorable
+
+    classes = [cls for name in COMPILED[package]
+               for _, cls in inspect.getmembers(import_module(f"altfusion.{package}.{name}"),
+                                                inspect.isclass)
+               if cls.__module__ == f"altfusion.{package}.{name}"]
+    assert len(classes) >= len(COMPILED[package]) - 3     # kalman, fault_detection, judges
+    for cls in classes:
+        if issubclass(cls, enum.Enum):
+            continue
+        assert issubclass(cls, Restorable), f"{cls.__qualname__} does not derive from Restorable"
+        if cls is not Restorable:
+            blank = cls.__new__(cls)
+            fields = getattr(cls, "__mypyc_attrs__", None) or [
+                name for klass in cls.__mro__ for name in klass.__dict__.get("__slots__", ())]
+            assert not [name for name in fields if hasattr(blank, name)], cls.__qualname__

@@ -239,7 +239,7 @@ class NoiseCheck(Restorable):
         if self.stated:
             last = self._last
             pair = self._pair(innovation, variance, CLIP, noise)
-            if pair is None or last is None:
+            if pair is None or last is None:          # (no pair without a last sample)
                 return
             pairs = min(self.pairs, self.window)
             self.ratio += (pair * self.factor - self.ratio) / pairs

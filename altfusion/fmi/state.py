@@ -431,8 +431,7 @@ class _Decoder:
             return tuple.__new__(cls, [self.decode(v) for v in tree["v"]])
         if tag == "object":
             cls = _allowed_class(tree["class"], self._own_module)
-            blank = cls.__new__(cls) if issubclass(cls, Restorable) else object.__new__(cls)
-            obj = self._register(tree, blank)
+            obj = self._register(tree, cls.__new__(cls))     # object's or Restorable's: blank
             for name, value in tree["v"].items():
                 if name.startswith("__") and name.endswith("__"):
                     raise StateError(f"attribute {name!r} of {tree['class']!r} refused")
