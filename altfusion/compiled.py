@@ -28,14 +28,17 @@ from pathlib import Path
 COMPILED = {"estimators": ("kalman", "restorable", "aid_source", "fault_detection", "stuck",
                             "noise_check", "prediction_judges", "accelerometer_check",
                             "process_noise", "range_aid", "ground_range",
-                            "reference_handover")}
+                            "reference_handover", "arrivals")}
 """Package (relative to the core) -> its modules compiled by mypyc: the Kalman steps every
 estimator runs and the machinery its members are made of (one aid source per sensor stream,
-the fault layer's tests and checks), typed. Their classes, native classes once compiled,
-derive from :class:`~altfusion.estimators.restorable.Restorable` (the FMU state codec makes
-them blank). The estimators' own classes are not compiled: they are mixins
+the samples arriving on each stream, the fault layer's tests and checks), typed. Their
+classes, native classes once compiled, derive from
+:class:`~altfusion.estimators.restorable.Restorable` (the FMU state codec makes them blank).
+The estimators' own classes are not compiled: they are mixins
 (:class:`~altfusion.estimators.intake.SampleIntake`, ...), which mypyc's native classes
-cannot be."""
+cannot be; their work at every step is done by members of the compiled modules (an
+estimator passes itself to :class:`~altfusion.estimators.arrivals.Arrivals`, which calls it
+back only for what a sample does to it beyond the intake)."""
 FOLDER = "_compiled"
 """The folder of a package's compiled modules."""
 MANIFEST = "manifest.json"

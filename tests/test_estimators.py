@@ -48,7 +48,8 @@ def test_one_update_per_new_sample_whatever_the_estimator_step(cls):
                 last = i == per_sample - 1
                 feeder.step(**baro_gps(baro=baro if last else None,
                                        gps=gps if last and (k + 1) % 5 == 0 else None))
-        assert feeder.estimator._last_count == {"baro": 50, "gps": 10}
+        counts = {s.prefix: s.last_count for s in feeder.estimator.arrivals.streams}
+        assert counts == {"baro": 50, "gps": 10}
         results.append(feeder.estimator.h_est)
     tolerance = {HajiyevAdaptiveEstimator: 0.0, BaselineKF: 1e-9, WhangGAEstimator: 0.05}[cls]
     assert results[0] == pytest.approx(results[1], abs=tolerance)

@@ -27,13 +27,17 @@ A sample whose stamp cannot be the present one is refused, counted in ``<prefix>
 * out of order: stamped before the last sample taken from the same stream.
 
 Inputs outside any stream (``extra_inputs``) are read with :meth:`SampleIntake.held_input`.
+
+The work of every step is :mod:`~altfusion.estimators.arrivals`' (one
+:class:`~altfusion.estimators.arrivals.StreamIntake` per stream, compiled); this mixin
+connects it to the estimator and holds the stuck check's use of the estimator's sources.
 """
 
 import math
 from functools import partial
 from typing import ClassVar
 
-from altfusion.estimators.health import STEP_BITS
+from altfusion.estimators.arrivals import Arrivals
 from altfusion.estimators.streams import GNSS, Stream
 from altfusion.estimators.stuck import StuckCheck, StuckReadings, refuse_stuck
 
@@ -66,50 +70,28 @@ class SampleIntake:
 
     def reset_intake(self) -> None:
         """Take the present counts as seen; no sample held; extra inputs held as given."""
-        self._last_count = {s.prefix: getattr(self, s.count) for s in self.streams}
-        self._seen = {prefix for prefix, count in self._last_count.items() if count > 0}
-        self._held: dict[str, dict[str, float]] = {}
-        """Samples stamped ahead of the clock, by stream prefix (a key of plain data: a
-        saved and restored state holds copies of the Stream constants, never the same ones)."""
-        self._last_stamp = dict.fromkeys(self._last_count, -math.inf)
-        """The stamp of the last sample taken from each stream, by prefix."""
-        self.n_ignored = 0
+        self.arrivals = Arrivals(self, self.streams, self.extra_inputs)
+        """What the streams delivered (:mod:`~altfusion.estimators.arrivals`)."""
         self._step_flags = 0
-        self._held_inputs: dict[str, float] = {}
-        self._bad_inputs: set[str] = set()
-        for name in self.extra_inputs:
-            value = float(getattr(self, name))
-            self._held_inputs[name] = value if math.isfinite(value) else 0.0
         params = self.params
         self.stuck = StuckReadings(self.sources(), params.stuck_samples) if (
             params.fault_detection and params.stuck_samples > 0) else None
         """The stuck check of the readings (fault layer; None without)."""
 
+    @property
+    def n_ignored(self) -> int:
+        """Samples and values ignored so far (the output ``n_ignored``)."""
+        return self.arrivals.n_ignored
+
     def due_samples(self) -> dict[Stream, dict[str, float]]:
         """The samples to fuse in this step: the new ones not stamped ahead of the clock and
-        the held ones now due, by stream."""
-        samples = {}
-        now = self.clock.now
-        due_by = now + 1e-9 * max(1.0, abs(now))       # not ahead of the clock (rounding aside)
-        last_count, held = self._last_count, self._held
-        for stream in self.streams:
-            prefix = stream.prefix
-            count = getattr(self, stream.count)
-            if count != last_count[prefix]:
-                sample = self._new_sample(stream, count, now)
-                if sample is not None:
-                    if sample[stream.time] <= due_by:   # the usual case: fused at once
-                        if held:
-                            held.pop(prefix, None)
-                        samples[stream] = sample
-                    else:
-                        held[prefix] = sample
-                    continue
-            if held:
-                sample = held.get(prefix)
-                if sample is not None and sample[stream.time] <= due_by:
-                    del held[prefix]
-                    samples[stream] = sample
+        the held ones now due, by stream (:meth:`~.arrivals.Arrivals.due`)."""
+        params = self.params
+        arrivals = self.arrivals
+        samples = arrivals.due(self, self.streams, self.clock.now, params.max_sample_lead,
+                               params.max_sample_delay)
+        if arrivals.flags:
+            self._step_flags |= arrivals.flags
         if self.stuck is not None:
             if samples:
                 return self._without_stuck(samples)
@@ -122,13 +104,7 @@ class SampleIntake:
         left out of its sample, a sample left without a measured value dropped; a GNSS
         reading repeated while the receiver holds still (:meth:`_gnss_at_rest`) only held."""
         stuck = self.stuck
-        checks = stuck.checks
-        now = self.clock.now
-        found = []
-        for stream, sample in samples.items():          # loops: no comprehension's frame
-            for name, source in stream.checked:
-                if checks[source].stuck(sample[name], now):
-                    found.append((stream, name, source))
+        found = stuck.find(samples, self.clock.now)
         gnss = samples.get(self.gnss_speed_stream) if self.gnss_speed_stream else None
         if gnss is not None:
             self._watch_receiver(gnss)
@@ -139,6 +115,7 @@ class SampleIntake:
             return samples
         stuck.found = tuple(source for _, _, source in found)
         samples = dict(samples)
+        checks = stuck.checks
         for stream, name, source in found:
             sample = samples[stream]
             check = checks[source]
@@ -213,103 +190,17 @@ class SampleIntake:
         raise NotImplementedError(f"{type(self).__name__} reads the GNSS vertical speed and "
                                   f"must give gnss_height_sigma")
 
-    def _new_sample(self, stream: Stream, count: int, now: float) -> dict[str, float] | None:
-        """The sample of ``stream``, whose count changed to ``count``, if it is valid, finite,
-        plausible and stamped in time for the clock's ``now`` (module documentation), else
-        None."""
-        prefix = stream.prefix
-        last_count = self._last_count
-        last = last_count[prefix]
-        last_count[prefix] = count
-        if count > last + 1:
-            self.note(f"{prefix}: {count - last - 1} sample(s) arrived between two "
-                      f"estimator steps; only the latest is fused", f"{prefix} skipped")
-        if stream.valid and not getattr(self, stream.valid):
-            self.frame_invalid(stream)
-            return None
-        sample = dict(zip(stream.fields, map(float, stream.read(self))))  # noqa: B905 (fast)
-        if not all(map(math.isfinite, sample.values())):
-            bad = {name: value for name, value in sample.items() if not math.isfinite(value)}
-            self._ignore(stream, f"non-finite sample ignored {bad}")
-            return None
-        stamp = sample[stream.time]
-        lead = stamp - now
-        params = self.params
-        if lead > params.max_sample_lead:
-            return self._refuse(stream, f"sample stamped {lead:.4g} s ahead of the clock (more "
-                                        f"than max_sample_lead) refused")
-        if -lead > params.max_sample_delay:
-            return self._refuse(stream, f"sample stamped {-lead:.4g} s behind the clock (more "
-                                        f"than max_sample_delay): stale, refused")
-        last_stamp = self._last_stamp
-        if stamp < last_stamp[prefix]:
-            return self._refuse(stream, f"sample stamped {stamp!r} s, before the stream's last "
-                                        f"sample ({last_stamp[prefix]!r} s): refused")
-        for name, source, bound in stream.bounds:
-            value = sample[name]
-            if abs(value) > bound:
-                self.refuse_implausible(self.aid[source], value, bound)
-                return None
-        for name, lowest, highest in stream.auxiliary:
-            self._check_auxiliary(sample, name, lowest, highest)
-        if prefix in self._held:
-            self.note(f"{prefix}: a held sample was replaced before it was due",
-                      f"{prefix} replaced")
-        if lead > 0.0:
-            self._step_flags |= STEP_BITS.SAMPLE_HELD
-        self._seen.add(prefix)
-        last_stamp[prefix] = stamp
-        return sample
-
     def frame_invalid(self, stream: Stream) -> None:
         """A new frame of ``stream`` arrived flagged invalid (a rangefinder out of its
         range): no sample; an estimator that reads something into it overrides this."""
 
-    def _check_auxiliary(self, sample: dict[str, float], name: str, lowest: float,
-                         highest: float) -> None:
-        """Leave the auxiliary value ``name`` out of ``sample`` if it lies outside
-        [``lowest``, ``highest``]: counted in ``n_ignored``, the first of a run noted."""
-        value = sample[name]
-        if lowest <= value <= highest:
-            self._bad_inputs.discard(name)
-            return
-        del sample[name]
-        self.n_ignored += 1
-        if name not in self._bad_inputs:
-            self._bad_inputs.add(name)
-            self.note(f"{name}: {value!r} is outside its plausible {lowest:g}-{highest:g} "
-                      f"(an input left unconnected?): the samples are fused without it "
-                      f"while it stays there")
-
-    def _refuse(self, stream: Stream, message: str) -> None:
-        """Refuse a sample of ``stream`` for its time stamp: counted in its source's
-        rejections, flagged and noted; returns None (no sample)."""
-        self.aid[stream.prefix].refused()
-        self.n_rejected += 1
-        self._step_flags |= STEP_BITS.SAMPLE_REFUSED
-        self.note(f"{stream.prefix}: {message}", f"{stream.prefix} refused")
-
-    def _ignore(self, stream: Stream, message: str) -> None:
-        self.n_ignored += 1
-        self.note(f"{stream.prefix}: {message}", f"{stream.prefix} ignored")
-
     def has_sample(self, prefix: str) -> bool:
         """True once the stream ``prefix`` has delivered a valid sample (or had one at the
         start): until then its input holds a placeholder, not a measurement."""
-        return prefix in self._seen
+        return prefix in self.arrivals.seen
 
     def held_input(self, name: str) -> float:
         """The extra input ``name``, or its last finite value if it is not finite now.
 
         A non-finite value counts in ``n_ignored``; the first of a run of them is noted."""
-        value = float(getattr(self, name))
-        held = self._held_inputs[name]
-        if math.isfinite(value):
-            self._held_inputs[name] = value
-            self._bad_inputs.discard(name)
-            return value
-        self.n_ignored += 1
-        if name not in self._bad_inputs:
-            self._bad_inputs.add(name)
-            self.note(f"{name}: non-finite sample ignored ({value}); holding {held!r}")
-        return held
+        return self.arrivals.held(self, name)

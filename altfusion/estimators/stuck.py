@@ -39,6 +39,7 @@ gate.
 
 import math
 from collections.abc import Callable, Iterable
+from typing import Any
 
 from altfusion.estimators.aid_source import AidSource
 from altfusion.estimators.restorable import Restorable
@@ -206,6 +207,19 @@ class StuckReadings(Restorable):
         """The baro's heights since a GNSS reading first repeated (:data:`VEHICLE_MOVING`)."""
         self.found: tuple[str, ...] = ()
         """The sources whose reading was stuck in the last step."""
+
+    def find(self, samples: dict[Any, dict[str, float]], now: float,
+             ) -> list[tuple[Any, str, str]]:
+        """The stuck readings of a step's ``samples`` (by stream: each stream's ``checked``
+        values judged by their source's check, taken at ``now``): (stream, input, source)
+        of each."""
+        checks = self.checks
+        found = []
+        for stream, sample in samples.items():
+            for name, source in stream.checked:
+                if checks[source].stuck(sample[name], now):
+                    found.append((stream, name, source))
+        return found
 
 
 def refuse_stuck(check: StuckCheck, source: AidSource, reading: float,
