@@ -38,10 +38,10 @@ from typing import ClassVar
 from altfusion.component import Component
 from altfusion.estimators.accelerometer_check import AccelerometerCheck
 from altfusion.estimators.aid_source import AidSource, Verdict
+from altfusion.estimators.gate import publish_health
 from altfusion.estimators.gating import Gating
 from altfusion.estimators.health import (
     HEIGHT_SOURCES,
-    STEP_BITS,
     SourceBit,
     Status,
     source_bit,
@@ -165,7 +165,7 @@ class Estimator(SampleIntake, Gating, Component):
             noise is not None and self.params.fault_detection) else None
         """PX4's bad_acc_vertical check of the accelerometer (fault layer; None without)."""
         self.initialize_filter()
-        self._publish_health()
+        publish_health(self, self.aid_sources)
 
     @abstractmethod
     def initialize_filter(self) -> None:
@@ -223,27 +223,4 @@ class Estimator(SampleIntake, Gating, Component):
         self.fuse_samples(self.due_samples())
         if self.acc_check is not None and self.started:
             self.acc_check.step(clock.now)
-        self._publish_health()
-
-    def _publish_health(self) -> None:
-        """``h_valid`` and ``status`` at the end of a step."""
-        flags = self._step_flags
-        started = self.started
-        now, timeout = self.clock.now, self.params.aiding_timeout
-        aided = now - self._last_aiding <= timeout
-        if started:
-            flags |= STEP_BITS.INITIALIZED
-            if not aided:
-                flags |= STEP_BITS.DEAD_RECKONING
-            self._started_at = min(self._started_at, now)
-        valid = started and aided
-        if valid and self.required_sources:
-            valid = all(now - max(self.aid[name].last_fused, self._started_at) <= timeout
-                        for name in self.required_sources)
-        self.h_valid = bool(valid)
-        for source in self.aid_sources:
-            flags |= source.bits
-        check = self.acc_check
-        if check is not None and check.bad:
-            flags |= STEP_BITS.BAD_ACC_VERTICAL
-        self.status = flags
+        publish_health(self, self.aid_sources)

@@ -6,10 +6,9 @@ reset the state onto a rejected sample or re-reference an isolated source, and i
 source that stays rejected while another pins the height.
 """
 
-import math
-
 from altfusion.estimators import fault_detection as faults
-from altfusion.estimators.aid_source import FUSED, AidSource, Verdict
+from altfusion.estimators.aid_source import AidSource, Verdict
+from altfusion.estimators.gate import accelerometer_suspect, accept, gate_sample
 from altfusion.estimators.health import NOISE_CHECKED, STEP_BITS
 from altfusion.estimators.noise_check import ShownNoise
 
@@ -30,35 +29,8 @@ class Gating:
         ``h_valid`` true). With ``fault_detection`` a sample failing the bias test is
         rejected too (unless the source's noise is found too small:
         :attr:`AidSource.noisy`), and a rejected one may reset the state or re-reference its
-        source."""
-        shown = source.shown
-        if shown is not None:
-            shown.gated(innovation, variance)
-            if shown.factor != 1.0 or self.std_factor != 1.0:
-                variance *= shown.factor
-                self._show_noise()
-        if sigmas > 0.0:
-            ratio = innovation * innovation / (sigmas * sigmas * max(variance, 1e-300))
-        else:
-            ratio = 0.0
-        source.test_ratio = min(ratio, 1e300)
-        now, params = self.clock.now, self.params
-        source.innovation, source.variance, source.last_gated = innovation, variance, now
-        biased = sigmas > 0.0 and params.fault_detection and faults.bias_test(
-            source, self._heights, now, params.reset_timeout, innovation,
-            variance, sigmas) and not source.noisy and not self._accelerometer_suspect()
-        if ratio <= 1.0 and not biased:
-            if sigmas > 0.0:
-                source.gate_width = sigmas * math.sqrt(max(variance, 0.0))
-            self.accept(source, aids_height)
-            return FUSED
-        if source.rejected_since is None:
-            source.rejected_since = now
-        if self.params.fault_detection:
-            verdict = self._resolve(source, innovation, variance)
-            if verdict is not None:
-                return verdict
-        return self._reject(source, innovation, ratio, biased)
+        source (:func:`~.gate.gate_sample`, compiled)."""
+        return gate_sample(self, source, innovation, variance, sigmas, aids_height)
 
     def attach_shown_noise(self) -> None:
         """With ``fault_detection``, unless the estimator checks its noises itself
@@ -138,7 +110,7 @@ class Gating:
                 and now - source.rejected_since >= self.params.reset_timeout
                 and (biased or self.contradicted(source, innovation))
                 and not source.isolated and not source.noisy
-                and not self._accelerometer_suspect()):
+                and not accelerometer_suspect(self)):
             source.isolate()
             self.note(f"{source.name}: rejected for {now - source.rejected_since:.3g} s while "
                       f"other sources are fused: isolated until a sample passes the gate")
@@ -146,13 +118,6 @@ class Gating:
                   f"{ratio:.3g}{', persistently biased' if biased else ''})",
                   f"{source.name} rejected")
         return Verdict.REJECTED
-
-    def _accelerometer_suspect(self) -> bool:
-        """True while the accelerometer check finds the prediction inconsistent with every
-        height source (:mod:`~altfusion.estimators.accelerometer_check`): then the sources'
-        disagreement is the prediction's fault, and no source is isolated for it."""
-        check = self.acc_check
-        return check is not None and check.suspect
 
     def contradicted(self, source: AidSource, innovation: float) -> bool:
         """True if another height source pins the height tighter than ``innovation``, or
@@ -183,7 +148,4 @@ class Gating:
     def accept(self, source: AidSource, aids_height: bool = True) -> None:
         """Record that a sample of ``source`` is fused (a height source aids the height unless
         ``aids_height`` is false)."""
-        now = self.clock.now
-        source.fused(now, aids_height)
-        if aids_height and source.height:
-            self._last_aiding = now
+        accept(self, source, aids_height, self.clock.now)
