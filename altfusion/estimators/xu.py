@@ -67,8 +67,7 @@ sensors since the paper gives none (docs/papers.md): laser 100 Hz ±5 mm 0.1-25 
 """
 
 import math
-from collections import deque
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from altfusion.estimators.base import Estimator, HealthParams, Verdict
 from altfusion.estimators.kalman import (
@@ -84,6 +83,7 @@ from altfusion.estimators.kalman import (
 )
 from altfusion.estimators.noise_check import WINDOW, NoiseCheck
 from altfusion.estimators.streams import ACC, BARO, GPS, LASER, Stream
+from altfusion.estimators.window_sum import WindowSum
 from altfusion.params import param
 
 BARO_SOURCE, LASER_SOURCE = 0, 1
@@ -177,7 +177,8 @@ class Channel:
 
     R_nominal: float
     b: float
-    window: deque = field(default_factory=deque)
+    window: WindowSum
+    """v²/C of the last N innovations (eq. 15)."""
     R_hat: float = 0.0
     beta: float = 1.0
     weight: float = 1.0
@@ -188,8 +189,8 @@ class Channel:
 
     def innovation_ratio(self, nis: float) -> float:
         """Eqs. (15)-(17): push v²/C and return α_C, the actual over the theoretical spread."""
-        self.window.append(nis)
-        return math.sqrt(math.fsum(self.window) / len(self.window))
+        self.window.push(nis)
+        return math.sqrt(self.window.total() / len(self.window))
 
     def estimate_noise(self, innovation: float, hph: float) -> None:
         """Eqs. (22) and (28), with H K_{k-1} = H P⁻ Hᵀ/(H P⁻ Hᵀ + R̂_{k-1}), the gain before
@@ -228,12 +229,12 @@ class XuSHAEKF(Estimator):
         self.P = diagonal((p.R_baro, p.P0_vz, p.acc_bias_std**2, p.baro_bias_std**2))
         self.u = 0.0
         self._acc_last: float | None = None
-        self._acc_diffs: deque = deque(maxlen=p.acc_window)
+        self._acc_diffs = WindowSum(p.acc_window)
         self.acc_noise_est = p.acc_noise_std
         self.channels = {
-            "gps": Channel(p.R_gps, p.b_gps, deque(maxlen=p.innovation_window)),
-            "baro": Channel(p.R_baro, p.b_baro, deque(maxlen=p.innovation_window)),
-            "laser": Channel(p.R_laser, p.b_laser, deque(maxlen=p.innovation_window)),
+            "gps": Channel(p.R_gps, p.b_gps, WindowSum(p.innovation_window)),
+            "baro": Channel(p.R_baro, p.b_baro, WindowSum(p.innovation_window)),
+            "laser": Channel(p.R_laser, p.b_laser, WindowSum(p.innovation_window)),
         }
         self.noise_checks = {name: NoiseCheck(self.aid[name], WINDOW, CHECK_MAXIMUM,
                                               flagged=CHECK_FLAGGED)
@@ -281,10 +282,10 @@ class XuSHAEKF(Estimator):
     def _accelerometer(self, acc: float) -> None:
         """The input u of eq. (9) and the real-time noise estimate of step 8."""
         if self._acc_last is not None:
-            self._acc_diffs.append((acc - self._acc_last) ** 2)
+            self._acc_diffs.push((acc - self._acc_last) ** 2)
         self._acc_last = self.u = acc
-        if self.params.adaptive and self._acc_diffs:
-            estimate = math.sqrt(math.fsum(self._acc_diffs) / (2.0 * len(self._acc_diffs)))
+        if self.params.adaptive and len(self._acc_diffs) > 0:
+            estimate = math.sqrt(self._acc_diffs.total() / (2.0 * len(self._acc_diffs)))
             self.acc_noise_est = max(self.params.acc_noise_std, estimate)
 
     def _select_source(self) -> None:
