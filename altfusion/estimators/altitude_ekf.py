@@ -97,6 +97,7 @@ from altfusion.estimators.health import NOISE_CHECKED, STEP_BITS, UNKNOWN_STD
 from altfusion.estimators.health_params import PX4_HEIGHT_BIAS_PSD
 from altfusion.estimators.kalman import (
     STATE_AND_COVARIANCE,
+    add_height_speed_noise,
     decorrelate,
     inflate_along,
     move_datum,
@@ -364,7 +365,7 @@ class AltitudeEKF(Estimator):
     def _predict(self, acc_sample) -> None:
         """x⁺ = F x + B a, P⁺ = F P Fᵀ + Q over one step (F P Fᵀ:
         :func:`~altfusion.estimators.kalman.predict_height_and_speed`; Q in the rows of h and
-        v, then mirrored)."""
+        v, then mirrored: :func:`~altfusion.estimators.kalman.add_height_speed_noise`)."""
         clock, p = self.clock, self.params
         dt, now = clock.step_size, clock.now
         previous = self._acc
@@ -386,18 +387,11 @@ class AltitudeEKF(Estimator):
         if not self.started:
             return
         x, P = predict_height_and_speed(self.x, self.P, dt, a_in, BA)
-        P_h, P_v = P[H], P[V]
         noise = self.sensor_noise["acc"] if self.acc_check is None else self.acc_check.noise
         scale = 1.0 if self.motion_noise is None else self.motion_noise.scale
         q = noise**2 * max(dt, self._acc_period) if acc_on else p.accel_psd * scale
-        P[H][H] += q * dt**3 / 3.0
-        P[V][H] += q * dt**2 / 2.0          # the symmetry loop copies it to P[H][V]
-        P[V][V] += q * dt
-        for i, psd in enumerate(self._q_rw):
-            P[i][i] += psd * dt
-        P[BA][BA] += (p.acc_bias_psd if acc_on else p.jerk_psd * scale) * dt
-        for j in range(N):                                # exact symmetry
-            P[j][H], P[j][V] = P_h[j], P_v[j]
+        add_height_speed_noise(P, dt, q, self._q_rw, BA,
+                               p.acc_bias_psd if acc_on else p.jerk_psd * scale)
         self.x, self.P = x, P
 
     def checks_own_noise(self) -> bool:

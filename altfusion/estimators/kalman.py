@@ -183,6 +183,24 @@ def predict_height_and_speed(x: Vector, P: Matrix, dt: float, acceleration: floa
     return x_new, P_new
 
 
+def add_height_speed_noise(P: list[list[float]], dt: float, q: float, walks: Sequence[float],
+                           bias: int, bias_noise: float) -> None:
+    """In place, on the P⁻ of :func:`predict_height_and_speed`: Q of one step added, then rows
+    h and v mirrored into columns h and v (P⁻ exactly symmetric). Q: a white acceleration of
+    spectral density ``q`` driving h and v (q dt³/3, q dt²/2, q dt), the random walk of each
+    state i of spectral density ``walks[i]``, and ``bias_noise`` on the bias state ``bias``."""
+    P_h, P_v = P[0], P[1]
+    P_h[0] += q * dt**3 / 3.0
+    P_v[0] += q * dt**2 / 2.0           # the symmetry loop copies it to P[0][1]
+    P_v[1] += q * dt
+    for i in range(len(walks)):
+        P[i][i] += walks[i] * dt
+    P[bias][bias] += bias_noise * dt
+    for j in range(len(P)):
+        row = P[j]
+        row[0], row[1] = P_h[j], P_v[j]
+
+
 def constant_states_noise(Q: Matrix, variances: Sequence[float]) -> tuple[tuple[float, ...], ...]:
     """``Q`` (n x n) extended by states that are constant up to independent random walks
     whose variances over the step are ``variances`` (a block diagonal Q)."""
