@@ -22,8 +22,9 @@ _REFUSED = int(STEP_BITS.SAMPLE_REFUSED)
 
 
 class StreamIntake(Restorable):
-    """One stream's inputs (names, bounds: copies of its
-    :class:`~altfusion.estimators.streams.Stream`'s) and what it delivered."""
+    """One stream's inputs (names, bounds) and what it delivered. The names and bounds are
+    copies of its :class:`~altfusion.estimators.streams.Stream`'s, read at every step: a
+    native field is read directly, a Stream's attribute through the interpreter's lookup."""
 
     __slots__ = ("prefix", "count_input", "time_input", "valid_input", "fields", "bounds",
                  "auxiliary", "last_count", "last_stamp", "held")

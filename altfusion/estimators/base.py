@@ -165,7 +165,7 @@ class Estimator(SampleIntake, Gating, Component):
             noise is not None and self.params.fault_detection) else None
         """PX4's bad_acc_vertical check of the accelerometer (fault layer; None without)."""
         self.initialize_filter()
-        publish_health(self, self.aid_sources)
+        publish_health(self)
 
     @abstractmethod
     def initialize_filter(self) -> None:
@@ -223,4 +223,4 @@ class Estimator(SampleIntake, Gating, Component):
         self.fuse_samples(self.due_samples())
         if self.acc_check is not None and self.started:
             self.acc_check.step(clock.now)
-        publish_health(self, self.aid_sources)
+        publish_health(self)

@@ -3,7 +3,7 @@
 The per-sample and per-step work of :mod:`~altfusion.estimators.gating` and
 :class:`~altfusion.estimators.base.Estimator`, compiled (:data:`altfusion.compiled.COMPILED`):
 :func:`gate_sample` (the test ratio, the bias test, the verdict of a sample that passes),
-:func:`accept` and :func:`publish_health`. The estimator is passed to each call; what a
+:func:`record_fused` and :func:`publish_health`. The estimator is passed to each call; what a
 rejected sample does to it (the fault layer's verdict, the rejection counted and noted) is
 its own methods' (``_resolve``, ``_reject``).
 """
@@ -45,7 +45,7 @@ def gate_sample(owner: Any, source: AidSource, innovation: float, variance: floa
     if ratio <= 1.0 and not biased:
         if sigmas > 0.0:
             source.gate_width = sigmas * math.sqrt(max(variance, 0.0))
-        accept(owner, source, aids_height, now)
+        record_fused(owner, source, aids_height, now)
         return FUSED
     if source.rejected_since is None:
         source.rejected_since = now
@@ -56,9 +56,9 @@ def gate_sample(owner: Any, source: AidSource, innovation: float, variance: floa
     return owner._reject(source, innovation, ratio, biased)
 
 
-def accept(owner: Any, source: AidSource, aids_height: bool, now: float) -> None:
+def record_fused(owner: Any, source: AidSource, aids_height: bool, now: float) -> None:
     """A sample of ``source`` fused by ``owner`` at ``now`` (a height source aids the height
-    unless ``aids_height`` is false)."""
+    unless ``aids_height`` is false): :meth:`~altfusion.estimators.gating.Gating.accept`."""
     source.fused(now, aids_height)
     if aids_height and source.height:
         owner._last_aiding = now
@@ -66,15 +66,16 @@ def accept(owner: Any, source: AidSource, aids_height: bool, now: float) -> None
 
 def accelerometer_suspect(owner: Any) -> bool:
     """True while ``owner``'s accelerometer check finds the prediction inconsistent with
-    every height source (:mod:`~altfusion.estimators.accelerometer_check`)."""
+    every height source (:mod:`~altfusion.estimators.accelerometer_check`): then the sources'
+    disagreement is the prediction's fault, and no source is isolated for it."""
     check = owner.acc_check
     return check is not None and bool(check.suspect)
 
 
-def publish_health(owner: Any, aid_sources: tuple[AidSource, ...]) -> None:
-    """``h_valid`` and ``status`` of ``owner``, the estimator whose aid sources are
-    ``aid_sources``, at the end of a step
+def publish_health(owner: Any) -> None:
+    """``h_valid`` and ``status`` of ``owner``, the estimator, at the end of a step
     (:meth:`~altfusion.estimators.base.Estimator.update`)."""
+    aid_sources: tuple[AidSource, ...] = owner.aid_sources
     flags: int = owner._step_flags
     started = bool(owner.started)
     now: float = owner.clock.now

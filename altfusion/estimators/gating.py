@@ -8,7 +8,7 @@ source that stays rejected while another pins the height.
 
 from altfusion.estimators import fault_detection as faults
 from altfusion.estimators.aid_source import AidSource, Verdict
-from altfusion.estimators.gate import accelerometer_suspect, accept, gate_sample
+from altfusion.estimators.gate import accelerometer_suspect, gate_sample, record_fused
 from altfusion.estimators.health import NOISE_CHECKED, STEP_BITS
 from altfusion.estimators.noise_check import ShownNoise
 
@@ -148,4 +148,4 @@ class Gating:
     def accept(self, source: AidSource, aids_height: bool = True) -> None:
         """Record that a sample of ``source`` is fused (a height source aids the height unless
         ``aids_height`` is false)."""
-        accept(self, source, aids_height, self.clock.now)
+        record_fused(self, source, aids_height, self.clock.now)

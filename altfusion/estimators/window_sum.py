@@ -63,6 +63,7 @@ class WindowSum(Restorable):
         return math.fsum(self.partials)
 
     def _leave(self, value: float) -> None:
+        """``value``, the oldest, leaves the window's sum."""
         if math.isfinite(value):
             self._add(-value)
         else:
