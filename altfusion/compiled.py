@@ -28,7 +28,7 @@ from pathlib import Path
 COMPILED = {"estimators": ("kalman", "restorable", "aid_source", "fault_detection", "stuck",
                             "noise_check", "prediction_judges", "accelerometer_check",
                             "process_noise", "range_aid", "ground_range",
-                            "reference_handover", "arrivals", "gate",
+                            "reference_handover", "arrivals", "gate", "floats",
                             "window_sum")}
 """Package (relative to the core) -> its modules compiled by mypyc: the Kalman steps every
 estimator runs and the machinery its members are made of (one aid source per sensor stream,

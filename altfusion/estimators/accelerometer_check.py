@@ -69,6 +69,7 @@ import math
 import statistics
 from collections import deque
 from collections.abc import Iterator
+from typing import Final
 
 from altfusion.estimators.aid_source import AidSource
 from altfusion.estimators.fault_detection import BIAS_MIN_SAMPLES
@@ -77,47 +78,47 @@ from altfusion.estimators.prediction_judges import Judgement, inconsistent
 from altfusion.estimators.restorable import Restorable
 from altfusion.estimators.streams import ACC_CLIP
 
-PERIOD = 0.1
+PERIOD: Final = 0.1
 """The check runs at most this often, s (at every estimator step when that is longer): its
 evidence moves over seconds, and a check at every 10 ms step cost 10 µs, a fifth of an
 estimator's step."""
 
-WINDOW = 1.0
+WINDOW: Final = 1.0
 """Time constant of the fraction of inconsistent checks, and how recent a source's last
 gated sample must be to count, s (PX4: the clipping fraction over the past 1 s)."""
 
-FRACTION = 0.5
+FRACTION: Final = 0.5
 """The accelerometer is bad when more than this fraction of the recent checks was
 inconsistent (PX4: more than 50 % clipped samples in the past 1 s)."""
 
-PROBATION = 10.0
+PROBATION: Final = 10.0
 """The accelerometer stays suspect this long after the last time the checks found it
 inconsistent, s (PX4 BADACC_PROBATION): long enough for the inflated noise to bring the
 prediction back onto the sources before any of them can be isolated for its fault."""
 
-GROWTH = 4.0
+GROWTH: Final = 4.0
 """Factor of the noise's inflation at each :data:`ESCALATION` over which the checks stay
 inconsistent."""
 
-ESCALATION = 3.0
+ESCALATION: Final = 3.0
 """Time between two inflations, s: longer than the height sources' bias windows
 (``reset_timeout``, 2.5 s by default), so that an inflation is judged on innovations taken
 after it."""
 
-DECAY = 300.0
+DECAY: Final = 300.0
 """Time constant of the inflation's return to the stated noise, s: slow, so that a noise
 that is really larger stays inflated between two inflations (the check can only see a noise
 too small, never one too large)."""
 
-BAD = 2.0
+BAD: Final = 2.0
 """The accelerometer is reported bad (``status`` bit ``BAD_ACC_VERTICAL``) while its noise
 is inflated by more than this factor."""
 
-SCATTER_SAMPLES = 100
+SCATTER_SAMPLES: Final = 100
 """Second differences of consecutive samples the scatter is taken over (1 s at 100 Hz); no
 estimate before there are as many."""
 
-EARLY_SAMPLES = 10
+EARLY_SAMPLES: Final = 10
 """Second differences from which the scatter of an accelerometer whose noise was not stated
 raises its noise above the starting value, before :data:`SCATTER_SAMPLES` are in (10: 0.1 s at
 100 Hz, 1.2 s at the 8.6 Hz of a logged ``sensor_combined``, where 100 took 11.6 s). Over 10
@@ -127,12 +128,12 @@ percentile 0.47, 99.9th 2.7): taken only above the starting value, it errs on th
 20x noisier (a logged multicopter's 6-10 m/s² of rotor vibration) is seen at least 4x
 noisier."""
 
-SECOND_DIFFERENCE_MAD = 0.6744897501960817 * math.sqrt(6.0)
+SECOND_DIFFERENCE_MAD: Final = 0.6744897501960817 * math.sqrt(6.0)
 """Median of |a_k - 2a_(k-1) + a_(k-2)| for white noise of σ = 1: the second difference of
 white noise is normal with variance (1 + 4 + 1)σ², and the median of |N(0, 1)| is
 Φ⁻¹(3/4)."""
 
-MARGIN = 3.0
+MARGIN: Final = 3.0
 """The measured scatter replaces the stated noise only beyond this factor of it (the
 accelerometer is then also reported bad, :data:`BAD`). Over :data:`SCATTER_SAMPLES` second
 differences the estimate of white noise has a relative standard error of 14 % (simulated:

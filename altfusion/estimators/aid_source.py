@@ -11,7 +11,7 @@ struct here, with the bias-test window and the isolation state of the fault laye
 import math
 from collections import deque
 from enum import Enum
-from typing import Any
+from typing import Any, Final
 
 from altfusion.estimators.health import (
     HEIGHT_SOURCES,
@@ -21,7 +21,7 @@ from altfusion.estimators.health import (
 )
 from altfusion.estimators.restorable import Restorable
 
-MAX_WINDOW_VALUE = 1e100
+MAX_WINDOW_VALUE: Final = 1e100
 """Innovations and variances entering a bias window are clipped to this magnitude, so that
 its running sums stay finite."""
 
@@ -95,7 +95,7 @@ class Verdict(Enum):
     and the source re-admitted: consumed, not fused."""
 
 
-FUSED = Verdict.FUSED
+FUSED: Final = Verdict.FUSED
 """:attr:`Verdict.FUSED` as a module constant, for the per-sample paths: an enum member read
 through its class takes the metaclass's slow attribute lookup (~0.1 µs), a global does not."""
 

@@ -12,13 +12,14 @@ arrivals as plain data.
 """
 
 import math
-from typing import Any
+from typing import Any, Final
 
+from altfusion.estimators.floats import finite
 from altfusion.estimators.health import STEP_BITS
 from altfusion.estimators.restorable import Restorable
 
-_HELD = int(STEP_BITS.SAMPLE_HELD)
-_REFUSED = int(STEP_BITS.SAMPLE_REFUSED)
+_HELD: Final = int(STEP_BITS.SAMPLE_HELD)
+_REFUSED: Final = int(STEP_BITS.SAMPLE_REFUSED)
 
 
 class StreamIntake(Restorable):
@@ -69,7 +70,7 @@ class Arrivals(Restorable):
         """The extra inputs and auxiliary values in a run of bad values (noted once)."""
         for name in extra_inputs:
             value = float(getattr(owner, name))
-            self.held_inputs[name] = value if math.isfinite(value) else 0.0
+            self.held_inputs[name] = value if finite(value) else 0.0
 
     def due(self, owner: Any, streams: tuple[Any, ...], now: float, max_lead: float,
             max_delay: float) -> dict[Any, dict[str, float]]:
@@ -112,14 +113,14 @@ class Arrivals(Restorable):
             owner.frame_invalid(stream)
             return None
         sample: dict[str, float] = {}
-        finite = True
+        all_finite = True
         for name in intake.fields:
             value = float(getattr(owner, name))
             sample[name] = value
-            if not math.isfinite(value):
-                finite = False
-        if not finite:
-            bad = {name: value for name, value in sample.items() if not math.isfinite(value)}
+            if not finite(value):
+                all_finite = False
+        if not all_finite:
+            bad = {name: value for name, value in sample.items() if not finite(value)}
             self.n_ignored += 1
             owner.note(f"{prefix}: non-finite sample ignored {bad}", f"{prefix} ignored")
             return None
@@ -182,7 +183,7 @@ class Arrivals(Restorable):
         (counted in ``n_ignored``; the first of a run of them noted)."""
         value = float(getattr(owner, name))
         held = self.held_inputs[name]
-        if math.isfinite(value):
+        if finite(value):
             self.held_inputs[name] = value
             self.bad_inputs.discard(name)
             return value

@@ -29,19 +29,20 @@ The history of these choices (which fault-suite runs each one fixed) is in
 
 import math
 from collections.abc import Iterable
+from typing import Final
 
 from altfusion.estimators.aid_source import AidSource, InnovationWindow
 
-BIAS_MIN_SAMPLES = 5
+BIAS_MIN_SAMPLES: Final = 5
 """Fewest samples in a source's window before its bias test can reject it."""
 
-BIAS_SIGMAS = 5.0
+BIAS_SIGMAS: Final = 5.0
 """Widest threshold of the bias test, in standard deviations of a window's mean: a
 consistent source's mean lies beyond it once in 1.7 million windows. An estimator whose
 single-sample gate is wider (XuSHAEKF's 6, for its adaptive noise) keeps that gate for single
 samples, not for the mean of many."""
 
-READMIT_SIGMAS = 2.0
+READMIT_SIGMAS: Final = 2.0
 """An isolated height source is re-admitted when the mean of its innovations over
 ``reset_timeout`` lies within this many standard deviations of that mean (95 % of the time
 for a consistent source)."""

@@ -9,15 +9,15 @@ its own methods' (``_resolve``, ``_reject``).
 """
 
 import math
-from typing import Any
+from typing import Any, Final
 
 from altfusion.estimators import fault_detection as faults
 from altfusion.estimators.aid_source import FUSED, AidSource, Verdict
 from altfusion.estimators.health import STEP_BITS
 
-_INITIALIZED = int(STEP_BITS.INITIALIZED)
-_DEAD_RECKONING = int(STEP_BITS.DEAD_RECKONING)
-_BAD_ACC_VERTICAL = int(STEP_BITS.BAD_ACC_VERTICAL)
+_INITIALIZED: Final = int(STEP_BITS.INITIALIZED)
+_DEAD_RECKONING: Final = int(STEP_BITS.DEAD_RECKONING)
+_BAD_ACC_VERTICAL: Final = int(STEP_BITS.BAD_ACC_VERTICAL)
 
 
 def gate_sample(owner: Any, source: AidSource, innovation: float, variance: float,

@@ -62,14 +62,15 @@ ground from a dropout.
 """
 
 import math
+from typing import Final
 
 from altfusion.estimators.restorable import Restorable
 
-PRESUMED_SIGMA = 2.0
+PRESUMED_SIGMA: Final = 2.0
 """Standard deviations of the height above the terrain that must stay within the laser's
 reach while the vehicle is presumed on the ground (one-sided 97.7 %; the gate's otherwise)."""
 
-LANDED_SPEED = 0.5
+LANDED_SPEED: Final = 0.5
 """Largest vertical speed of a vehicle that may stand on the ground, m/s (PX4's multicopter
 land detector, LNDMC_Z_VEL_MAX's default)."""
 

@@ -26,12 +26,13 @@ back into the interpreter for every element; interpreted, the copies cost a C-le
 import math
 from collections.abc import Iterable, Sequence
 from operator import add
+from typing import Final
 
 # ----------------------------------------------------------------- scalar arithmetic
 Vector = Sequence[float]
 Matrix = Sequence[Sequence[float]]
 
-STATE_AND_COVARIANCE = {"x": ("P",)}
+STATE_AND_COVARIANCE: Final = {"x": ("P",)}
 """``state_covariances`` of a filter whose state vector is ``x`` and its covariance ``P``: a
 restored FMU state must keep the two one size (:mod:`altfusion.fmi.state`)."""
 
@@ -166,7 +167,7 @@ def predict_height_and_speed(x: Vector, P: Matrix, dt: float, acceleration: floa
     v of F P, then their entries in columns h and v of (F P) Fᵀ. The other rows' entries in
     columns h and v are left as P had them: the caller adds Q to rows h and v and then
     mirrors those rows into columns h and v (P⁻ symmetric). Returns x⁻ and that P."""
-    P_new = list(map(list, P))
+    P_new = _rows(P)
     c = 0.5 * dt * dt                                 # ∂h⁻/∂(-b)
     e = dt                                            # ∂v⁻/∂(-b)
     a = acceleration - x[bias]
@@ -302,7 +303,7 @@ def predict_sparse(x: Vector, P: list[list[float]], F: Sequence[Sequence[tuple[i
     Row a of F P is P Fₐᵀ (P symmetric), each entry of F P Fᵀ a sparse sum of that row:
     the work grows with F's non-zero entries, not with n³. The upper triangle is computed and
     mirrored, so that P⁻ is exactly symmetric (P and Q must be symmetric)."""
-    x_old, terms = list(x), list(map(list, F))
+    x_old, terms = list(x), [list(F_a) for F_a in F]
     FP = [_times_row(P, F_a) for F_a in terms]
     n = len(terms)
     P_new = _rows(Q)
@@ -372,8 +373,10 @@ def update_scalar_of(x: Vector, P: Matrix, H: Sequence[tuple[int, float]], innov
 
 
 def _rows(P: Matrix) -> list[list[float]]:
-    """A copy of P as a list of lists (the update writes into it)."""
-    return list(map(list, P))
+    """A copy of P as a list of lists (the update writes into it); a comprehension, which
+    compiled is a native loop, where ``list(map(list, P))`` calls ``map`` and each ``list``
+    through the interpreter."""
+    return [list(row) for row in P]
 
 
 def _gain_step(x: list[float], P: list[list[float]], row: list[float], K: list[float],

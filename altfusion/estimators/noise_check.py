@@ -112,22 +112,24 @@ typical σ is mostly such an error, unless its samples scatter as much.
 import math
 from functools import cache
 from statistics import NormalDist
+from typing import Final
 
 from altfusion.estimators.aid_source import AidSource
+from altfusion.estimators.floats import finite
 from altfusion.estimators.restorable import Restorable
 
-CLIP = 25.0
+CLIP: Final = 25.0
 """Largest contribution of one pair of innovations to the ratio (the square of the 5σ gate:
 a consistent pair exceeds it once in 1.7 million; two samples each within a 5σ gate can
 reach 50)."""
 
-FLAGGED = 4.0
+FLAGGED: Final = 4.0
 """``NOISE_INFLATED`` is set while the variance factor exceeds this: the noise in use more
 than twice the stated σ (the accelerometer check's ``BAD``). With the default window of 100
 pairs, m of a source as told has the spread of χ² with about 200 degrees of freedom over
 200: beyond 4 practically never (beyond 1.5 with a probability of about 10⁻⁷)."""
 
-NOISY = 2.0
+NOISY: Final = 2.0
 """Above this ratio m, within its first ``window`` pairs, the source is ``noisy``
 (:attr:`AidSource.noisy`): it is not isolated, nor rejected for its bias test. While its
 noise is being found too small its samples fail a gate and a bias test sized by the stated
@@ -138,27 +140,27 @@ told exceeds it only in its first pairs (the mean of 20 χ² ratios beyond 2 onc
 step or a drift does not move the ratio (differences), one wild sample by at most
 CLIP/window."""
 
-MIN_PAIRS = 20
+MIN_PAIRS: Final = 20
 """The flag is set only after this many pairs: the mean of 20 ratios of a source as told
 exceeds 4 with the probability of χ² with 20 degrees of freedom beyond 80, 10⁻⁸ (the
 first pairs alone would flag a source as told once in 22: χ² with one degree beyond 4)."""
 
-UNSTATED_RANGE = 100.0
+UNSTATED_RANGE: Final = 100.0
 """A noise not stated is learnt within this factor either way of its typical value (σ; its
 variance within the square): from a small UAV's typical sensors to the 20-70 m baro and GNSS
 of a paper's aircraft, and down to a 5 mm laser."""
 
-UNSTATED_START = 100.0
+UNSTATED_START: Final = 100.0
 """A noise not stated starts at this factor on its typical variance (σ tenfold)."""
 
-FALL = 4.0
+FALL: Final = 4.0
 """The factor of a noise not stated falls by at most this ratio per pair."""
 
-WINDOW = 100.0
+WINDOW: Final = 100.0
 """Pairs in a check's window (AltitudeEKF's default ``adaptive_window``, XuSHAEKF's checks,
 :class:`ShownNoise`)."""
 
-CONFIDENCE = 0.975
+CONFIDENCE: Final = 0.975
 """One-sided confidence that the true variance of a noise not stated is below the one in use
 (the two-standard-error bound of a normal estimate)."""
 
@@ -308,7 +310,7 @@ class NoiseCheck(Restorable):
         if last is None:
             return None
         total = variance + last[1]
-        if not total > 0.0 or not math.isfinite(total):
+        if not total > 0.0 or not finite(total):
             return None
         difference = innovation - last[0]
         self.pairs += 1
@@ -319,7 +321,7 @@ class NoiseCheck(Restorable):
         self._last = None
 
 
-SHOWN = 2.0
+SHOWN: Final = 2.0
 """A paper filter's stated noise is taken as shown too small (:class:`ShownNoise`) while the
 lower bound of the true ratio's one-sided CONFIDENCE interval exceeds this (from
 :data:`MIN_PAIRS` pairs on): the noise's σ more than 1.4 times the stated, beyond which
@@ -329,7 +331,7 @@ its mean ratio must exceed 3.4 (χ² with 20 degrees of freedom beyond 68, 10⁻
 every pair after."""
 
 
-SHOWN_MAXIMUM = 100.0
+SHOWN_MAXIMUM: Final = 100.0
 """Largest factor :class:`ShownNoise` shows (σ tenfold, AltitudeEKF's ``adaptive_max``):
 its gate is widened by no more, so that a sensor gone to noise far beyond its description
 is not let in at the weight the filter gives it, and is judged by the fault layer."""

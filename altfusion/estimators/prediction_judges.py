@@ -26,12 +26,13 @@ without one); each decides what a judgement is made of.
 
 import math
 from collections.abc import Iterable
+from typing import Final
 
-SIGMAS = 3.0
+SIGMAS: Final = 3.0
 """A disagreement beyond this many standard deviations counts against the prediction (PX4
 EKF2's vertical innovation test limit, 3)."""
 
-MIN_SOURCES = 2
+MIN_SOURCES: Final = 2
 """Fewest independent judges of the prediction for it to be found off where more are there
 to judge: with one height source alone, that source could be the one off."""
 

@@ -72,21 +72,22 @@ Anchors and deviations:
 """
 
 import math
+from typing import Final
 
 from altfusion.estimators.aid_source import AidSource
 from altfusion.estimators.prediction_judges import MIN_SOURCES, Judgement, inconsistent, judge
 from altfusion.estimators.restorable import Restorable
 
-PERIOD = 0.1
+PERIOD: Final = 0.1
 """The prediction is judged at most this often, s (at every estimator step when that is
 longer): the evidence moves over seconds (the accelerometer check's period)."""
 
-MEMORY = 2.0
+MEMORY: Final = 2.0
 """Time constant of each judge's fading innovation mean, s (a hundred samples of a 50 Hz
 baro, ten of a 5 Hz one: a manoeuvre of a few seconds is seen), and how recent its last
 sample must be to judge (a 1 Hz GNSS judges between its samples)."""
 
-SIGMAS = 4.0
+SIGMAS: Final = 4.0
 """A judge's fading mean beyond this many of its standard deviations disagrees with the
 prediction: a right prediction's lies beyond it once in 16,000 independent windows (a 1 Hz
 GNSS's ten-second windows: once in 44 hours), where the accelerometer check's 3 would be
@@ -94,37 +95,37 @@ once in 370 (an hour). The second judge that a source off by itself (a baro whos
 steps with the weather, which alone raises no motion noise) needs must not be found by
 chance; a manoeuvre's lag grows beyond either within seconds."""
 
-HOLD_SIGMAS = 2.0
+HOLD_SIGMAS: Final = 2.0
 """Once found off, the prediction stays off while the judges stay beyond this many standard
 deviations (hysteresis, as the bias test's re-admission at 2): the noise is raised until the
 lag is within the evidence's spread, not just below the threshold that found it."""
 
-MAX_WEIGHT = 0.1
+MAX_WEIGHT: Final = 0.1
 """Largest weight of one sample in the evidence: at least ten samples make it (ten seconds
 of a 1 Hz GNSS; a faster source's :data:`MEMORY` holds more), so that the spread of its
 successive differences is known to about a third, and one sample that is off by itself
 (an outlier within the gate) does not make a disagreement."""
 
-GROWTH = 4.0
+GROWTH: Final = 4.0
 """Factor of each raise of the noise (the accelerometer check's): from the default
 ``accel_psd`` of 0.01 m²/s³ to 1 g's bound (96 m²/s³) in 7 raises."""
 
-ESCALATION = 2.0
+ESCALATION: Final = 2.0
 """Least time between two raises, s: :data:`MEMORY`, so that a fast source's evidence is
 judged on innovations taken after the previous raise (a slow source's, over ten samples,
 mostly before: the hysteresis of :data:`HOLD_SIGMAS` then stops the raises once the lag is
 within the spread)."""
 
-DECAY = 60.0
+DECAY: Final = 60.0
 """Time constant of the return to the stated noise, s: a manoeuvre's noise is kept for a
 minute after the sources agree again (a flight's manoeuvres come in phases of tens of
 seconds: a climb's start and end), and is gone within minutes of steady flight."""
 
-ADAPTED = 2.0
+ADAPTED: Final = 2.0
 """The noise is reported adapted (``status`` bit ``PROCESS_NOISE_ADAPTED``) while it is
 more than this factor above the stated (the accelerometer check's ``BAD``)."""
 
-REFERENCE_PERIOD = 1.0
+REFERENCE_PERIOD: Final = 1.0
 """s: the white-acceleration noise of PSD q changes the speed by about √(q·T) over a time T
 (Bar-Shalom et al., Chapter 6: their rule for choosing q): a vehicle whose acceleration stays below
 a_max changes its speed by at most a_max·T, so q <= a_max²·T, taken over the 1 s of a slow

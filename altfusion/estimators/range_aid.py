@@ -49,34 +49,35 @@ Deviations from PX4 EKF2:
 """
 
 import math
+from typing import Final
 
 from altfusion.estimators.aid_source import AidSource
 from altfusion.estimators.restorable import Restorable
 
-RATE_SPAN = 0.2
+RATE_SPAN: Final = 0.2
 """Shortest time between the two samples of a range rate, s: a 5 mm laser's rate is then
 known to 0.035 m/s (√2·0.005/0.2); at 100 Hz a rate from successive samples would hold
 0.7 m/s of noise."""
 
-TAU = 2.0
+TAU: Final = 2.0
 """Time constant of the low-pass filter on the normalized rate innovation s, s. With spans of
 RATE_SPAN, s̄ of a consistent rangefinder has the standard deviation √(α/(2 - α)) = 0.23
 (α = RATE_SPAN/TAU): beyond :data:`GATE` at 4.4 of it (once in 10⁵ spans)."""
 
-RATE_FLOOR = 0.1
+RATE_FLOOR: Final = 0.1
 """Least standard deviation of a rate innovation, m/s: the range rate also moves with what a
 vertical model lacks, the vehicle's tilt and its horizontal motion over terrain that is
 nearly flat (a 1° slope crossed at 5 m/s moves the range by 0.09 m/s), and a rangefinder
 stated too precise (its noise not yet inflated by its noise check, which cannot see it while
 the terrain walks) would otherwise never be found consistent."""
 
-GATE = 1.0
+GATE: Final = 1.0
 """|s̄| below this: kinematically consistent (PX4 EKF2_RNG_K_GATE's default, 1)."""
 
-HOLD = 1.0
+HOLD: Final = 1.0
 """The conditions hold this long before the aid starts, s."""
 
-STALE = 1.0
+STALE: Final = 1.0
 """A rangefinder not gated for this long no longer counts (stopped, or out of its own
 range), s."""
 

@@ -38,22 +38,23 @@ the GNSS only, not of a baro reference (its slow drift is its nature).
 
 import math
 from collections.abc import Iterable, Mapping
+from typing import Final
 
 from altfusion.estimators.aid_source import AidSource, InnovationWindow
 from altfusion.estimators.fault_detection import BIAS_MIN_SAMPLES, BIAS_SIGMAS, agrees
 from altfusion.estimators.restorable import Restorable
 
-SPAN = 30.0
+SPAN: Final = 30.0
 """The long window, s: a 10 m shift of a 30 m GNSS at 10 Hz is 5.8 standard deviations of
 its mean over it (1.7 m; over 10 s, 3.3)."""
 
-COVERED = 0.5
+COVERED: Final = 0.5
 """The reference's window must reach this share of :data:`SPAN` back: a source back from an
 outage off by more than its noise is the fault layer's to judge in its first seconds
 (measured: a GNSS back 50 m off, before its bias test isolated it, handed the datum over
 within a second, re-admitted with the offset; PX4 does not re-admit it)."""
 
-REFERENCE = "gps"
+REFERENCE: Final = "gps"
 """The source whose shift is judged: the GNSS height reference."""
 
 

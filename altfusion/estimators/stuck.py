@@ -39,12 +39,13 @@ gate.
 
 import math
 from collections.abc import Callable, Iterable
-from typing import Any
+from typing import Any, Final
 
 from altfusion.estimators.aid_source import AidSource
+from altfusion.estimators.floats import finite
 from altfusion.estimators.restorable import Restorable
 
-VEHICLE_MOVING = 0.05
+VEHICLE_MOVING: Final = 0.05
 """The slowest climb or descent (m/s) the baro's heights must show, beyond their scatter, for a
 repeated GNSS height to be stuck rather than held by a receiver at rest: seven times the
 fastest drift of a baro at rest (a strong weather front, ~3 hPa/h ≈ 25 m/h ≈ 0.007 m/s), so
@@ -52,7 +53,7 @@ that a receiver in static hold through a long wait on the ground is not taken fo
 one."""
 
 
-MOTION_WINDOW = 10.0
+MOTION_WINDOW: Final = 10.0
 """The span (s) of the baro's heights judged at once for motion while a GNSS reading
 repeats: the run starts afresh after each span that shows none, so that a climb after a
 long wait on the ground shows within about one span (a least-squares slope over a ten-minute
@@ -112,7 +113,7 @@ class GnssCheck(StuckCheck):
         read to 0.1 m, wandering 0.3 m over a minute, held a reading for 1.9 s of a
         0.1 m/s climb, 0.23 m); 0 before any change was seen (a reading that never changed,
         such as an unconnected input, gets no allowance)."""
-        return 3.0 * self.resolution if math.isfinite(self.resolution) else 0.0
+        return 3.0 * self.resolution if finite(self.resolution) else 0.0
 
 
 class HeightSlope(Restorable):

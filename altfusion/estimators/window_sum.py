@@ -16,6 +16,7 @@ the window itself.
 import math
 from collections import deque
 
+from altfusion.estimators.floats import finite
 from altfusion.estimators.restorable import Restorable
 
 
@@ -42,7 +43,7 @@ class WindowSum(Restorable):
         if len(values) == values.maxlen:
             self._leave(values[0])
         values.append(value)
-        if math.isfinite(value):
+        if finite(value):
             self._add(value)
         else:
             self.non_finite += 1
@@ -64,7 +65,7 @@ class WindowSum(Restorable):
 
     def _leave(self, value: float) -> None:
         """``value``, the oldest, leaves the window's sum."""
-        if math.isfinite(value):
+        if finite(value):
             self._add(-value)
         else:
             self.non_finite -= 1
@@ -74,7 +75,7 @@ class WindowSum(Restorable):
         self.partials = []
         self.exact = True
         for value in self.values:
-            if math.isfinite(value):
+            if finite(value):
                 self._add(value)
 
     def _add(self, x: float) -> None:
@@ -86,7 +87,7 @@ class WindowSum(Restorable):
             if abs(x) < abs(y):
                 x, y = y, x
             high = x + y
-            if not math.isfinite(high):
+            if not finite(high):
                 self.exact = False
                 return
             low = y - (high - x)
