@@ -323,7 +323,7 @@ class AltitudeEKF(Estimator):
                                               p.adaptive_max, self.noise_stated[name])
                              for name in NOISE_CHECKED if p.adaptive_noise}
         """Each checked source's noise check (none without ``adaptive_noise``)."""
-        self.range_aid = RangeAid((self.aid["radar"], self.aid["laser"]), self._heights,
+        self.range_aid = RangeAid((self.aid["radar"], self.aid["laser"]), self.health.heights,
                                   p.range_aid_max_height, p.range_hysteresis) \
             if p.range_aid else None
         """PX4's conditional range aid (None without ``range_aid``)."""
@@ -351,7 +351,7 @@ class AltitudeEKF(Estimator):
         self._slow_error()        # as stated, before any GNSS sample (and after a restart)
         self.n_terrain_resets = 0
         self.motion_noise = MotionNoise(
-            (*self._heights, self.aid["gps_vz"]), maximum_scale(p.accel_psd,
+            (*self.health.heights, self.aid["gps_vz"]), maximum_scale(p.accel_psd,
                                                                 p.max_acceleration),
             p.gate_sigma) if p.adaptive_motion_noise else None
         """The motion model's noise adaptation (None: ``adaptive_motion_noise`` off)."""
@@ -485,7 +485,7 @@ class AltitudeEKF(Estimator):
             self._q_rw[T] = 0.0 if aid.active else walk
             self.note(f"range aid {'started: the terrain held' if aid.active else 'stopped'}")
         if aid.active:
-            self._step_flags |= STEP_BITS.RANGE_AID
+            self.health.step_flags |= STEP_BITS.RANGE_AID
 
     def frame_invalid(self, stream) -> None:
         """An invalid laser frame: perhaps the vehicle on the ground (:meth:`_ground_reading`,
@@ -523,7 +523,7 @@ class AltitudeEKF(Estimator):
             return
         adaptation.step(self.time)
         if adaptation.adapted:
-            self._step_flags |= STEP_BITS.PROCESS_NOISE_ADAPTED
+            self.health.step_flags |= STEP_BITS.PROCESS_NOISE_ADAPTED
 
     def _ground_constraint(self) -> None:
         """The vehicle cannot be below the ground its rangefinders see, nor sink into it:
@@ -624,7 +624,7 @@ class AltitudeEKF(Estimator):
         if not (self._reference_seen if self._reference is not None else self._terrain_known):
             return False
         now, window = self.time, self.params.reset_timeout
-        return any(now - source.last_fused <= window for source in self._heights
+        return any(now - source.last_fused <= window for source in self.health.heights
                    if source.name != "baro")
 
     def _fuse_height(self, source: str, z: float, stamp: float, sigma: float) -> None:
@@ -745,7 +745,7 @@ class AltitudeEKF(Estimator):
         p = self.params
         since = self._reference_rejected_since
         if not (p.fault_detection and since is not None and math.isfinite(since)
-                and self.time - self._last_aiding >= p.reset_timeout
+                and self.time - self.health.last_aiding >= p.reset_timeout
                 and y * y > p.gate_sigma**2 * S):
             return False
         z, stamp, sigma = self._reference_sample

@@ -38,7 +38,7 @@ from typing import ClassVar
 from altfusion.component import Component
 from altfusion.estimators.accelerometer_check import AccelerometerCheck
 from altfusion.estimators.aid_source import AidSource, Verdict
-from altfusion.estimators.gate import publish_health
+from altfusion.estimators.gate import EstimatorHealth
 from altfusion.estimators.gating import Gating
 from altfusion.estimators.health import (
     HEIGHT_SOURCES,
@@ -111,8 +111,8 @@ class Estimator(SampleIntake, Gating, Component):
 
     @property
     def h_std(self) -> float:
-        """The published ``h_std``: the filter's, times √:attr:`std_factor`."""
-        return self._h_std * math.sqrt(self.std_factor)
+        """The published ``h_std``: the filter's, times √ of the health's ``std_factor``."""
+        return self._h_std * math.sqrt(self.health.std_factor)
 
     @h_std.setter
     def h_std(self, value: float) -> None:
@@ -150,22 +150,20 @@ class Estimator(SampleIntake, Gating, Component):
         self.aid_sources = tuple(AidSource(source) for source in self.sources())
         self.aid = {source.name: source for source in self.aid_sources}
         """The aid sources by name."""
-        self.std_factor = 1.0
-        """The factor on the filter's variance of ``h`` in the published ``h_std``: the largest
-        shown by the sources' :attr:`AidSource.shown` (1: as the filter computes)."""
+        health = self.health = EstimatorHealth(
+            self.aid_sources, tuple(self.aid[name] for name in self.required_sources),
+            self.params)
+        """The estimator's health beyond its sources' (:class:`~.gate.EstimatorHealth`)."""
         self.attach_shown_noise()
-        self._heights = tuple(source for source in self.aid_sources if source.height)
-        self._last_aiding = -math.inf
-        self._started_at = math.inf
         noise = self.accelerometer_noise()
-        judges = (*self._heights, *(s for s in self.aid_sources if s.name == "gps_vz")) \
+        judges = (*health.heights, *(s for s in self.aid_sources if s.name == "gps_vz")) \
             if self.acc_drives_prediction else ()
-        self.acc_check = AccelerometerCheck(
+        self.acc_check = health.acc_check = AccelerometerCheck(
             noise, judges, self.accelerometer_noise_stated()) if (
             noise is not None and self.params.fault_detection) else None
         """PX4's bad_acc_vertical check of the accelerometer (fault layer; None without)."""
         self.initialize_filter()
-        publish_health(self)
+        self.h_valid, self.status = health.publish(self.started, self.clock.now)
 
     @abstractmethod
     def initialize_filter(self) -> None:
@@ -217,10 +215,9 @@ class Estimator(SampleIntake, Gating, Component):
             self.fuse(stream, sample)
 
     def update(self) -> None:
-        self._step_flags = 0
         clock = self.clock
         self.propagate(clock.step_size)
         self.fuse_samples(self.due_samples())
         if self.acc_check is not None and self.started:
             self.acc_check.step(clock.now)
-        publish_health(self)
+        self.h_valid, self.status = self.health.publish(self.started, clock.now)

@@ -8,7 +8,7 @@ source that stays rejected while another pins the height.
 
 from altfusion.estimators import fault_detection as faults
 from altfusion.estimators.aid_source import AidSource, Verdict
-from altfusion.estimators.gate import accelerometer_suspect, gate_sample, record_fused
+from altfusion.estimators.gate import gate_sample, record_fused
 from altfusion.estimators.health import NOISE_CHECKED, STEP_BITS
 from altfusion.estimators.noise_check import ShownNoise
 
@@ -30,7 +30,8 @@ class Gating:
         rejected too (unless the source's noise is found too small:
         :attr:`AidSource.noisy`), and a rejected one may reset the state or re-reference its
         source (:func:`~.gate.gate_sample`, compiled)."""
-        return gate_sample(self, source, innovation, variance, sigmas, aids_height)
+        return gate_sample(self, self.health, source, innovation, variance, sigmas, aids_height,
+                           self.clock.now)
 
     def attach_shown_noise(self) -> None:
         """With ``fault_detection``, unless the estimator checks its noises itself
@@ -44,8 +45,8 @@ class Gating:
                     source.shown = ShownNoise(source)
 
     def _show_noise(self) -> None:
-        """:attr:`std_factor` from the noise factors the sources' innovations show."""
-        self.std_factor = max(source.shown.factor for source in self.aid_sources
+        """The health's ``std_factor`` from the noise factors the sources' innovations show."""
+        self.health.std_factor = max(source.shown.factor for source in self.aid_sources
                               if source.shown is not None)
 
     def restart_without(self, name: str) -> None:
@@ -57,7 +58,7 @@ class Gating:
         baro and the GNSS for good, the height 90 m off at an h_std of 1-3 m."""
         self.note(f"{name}: stuck since before the filter started: the filter starts afresh "
                   f"without it")
-        for source in self._heights:
+        for source in self.health.heights:
             if source.name != name:
                 source.rejudge()
         self.started = False
@@ -78,14 +79,14 @@ class Gating:
         fused for ``reset_timeout``, nothing pinning the height tighter) or a velocity reset
         (the GNSS speed rejected that long), a re-reference of an isolated source with a
         constant offset (rejected for twice ``reset_timeout``), or None: rejected."""
-        now, timeout = self.time, self.params.reset_timeout
+        now, timeout, last_aiding = self.time, self.params.reset_timeout, self.health.last_aiding
         since = source.rejected_since
         if self.started and (
-                (source.height and now - self._last_aiding >= timeout
+                (source.height and now - last_aiding >= timeout
                  and not self.contradicted(source, innovation))
                 or (source.name == "gps_vz" and now - since >= timeout)):
             self.height_reset(source, innovation, variance,
-                              f"no height source fused for {now - self._last_aiding:.3g} s")
+                              f"no height source fused for {now - last_aiding:.3g} s")
             return Verdict.RESET
         if not (source.height and source.isolated and now - since >= 2.0 * timeout
                 and source.window.one_sided(faults.BIAS_MIN_SAMPLES)
@@ -110,7 +111,7 @@ class Gating:
                 and now - source.rejected_since >= self.params.reset_timeout
                 and (biased or self.contradicted(source, innovation))
                 and not source.isolated and not source.noisy
-                and not accelerometer_suspect(self)):
+                and not self.health.accelerometer_suspect()):
             source.isolate()
             self.note(f"{source.name}: rejected for {now - source.rejected_since:.3g} s while "
                       f"other sources are fused: isolated until a sample passes the gate")
@@ -124,7 +125,7 @@ class Gating:
         ``source`` failed its bias test (:func:`.fault_detection.contradicted`; with
         ``fault_detection``, else False)."""
         return self.params.fault_detection and faults.contradicted(
-            source, self._heights, self.time, self.params.reset_timeout, innovation)
+            source, self.health.heights, self.time, self.params.reset_timeout, innovation)
 
     def height_reset(self, source: AidSource, innovation: float, variance: float,
                      reason: str) -> None:
@@ -133,7 +134,7 @@ class Gating:
         the sample accepted."""
         self.reset_height(source.name, innovation, variance)
         self.n_height_resets += 1
-        self._step_flags |= STEP_BITS.HEIGHT_RESET
+        self.health.step_flags |= STEP_BITS.HEIGHT_RESET
         self.note(f"{source.name}: {reason}; height reset by {innovation:.4g} m to this source "
                   f"(reset {self.n_height_resets})")
         self.accept(source)
@@ -148,4 +149,4 @@ class Gating:
     def accept(self, source: AidSource, aids_height: bool = True) -> None:
         """Record that a sample of ``source`` is fused (a height source aids the height unless
         ``aids_height`` is false)."""
-        record_fused(self, source, aids_height, self.clock.now)
+        record_fused(self.health, source, aids_height, self.clock.now)

@@ -72,7 +72,6 @@ class SampleIntake:
         """Take the present counts as seen; no sample held; extra inputs held as given."""
         self.arrivals = Arrivals(self, self.streams, self.extra_inputs)
         """What the streams delivered (:mod:`~altfusion.estimators.arrivals`)."""
-        self._step_flags = 0
         params = self.params
         self.stuck = StuckReadings(self.sources(), params.stuck_samples) if (
             params.fault_detection and params.stuck_samples > 0) else None
@@ -91,7 +90,7 @@ class SampleIntake:
         samples = arrivals.due(self, self.streams, self.clock.now, params.max_sample_lead,
                                params.max_sample_delay)
         if arrivals.flags:
-            self._step_flags |= arrivals.flags
+            self.health.step_flags |= arrivals.flags
         if self.stuck is not None:
             if samples:
                 return self._without_stuck(samples)
@@ -121,7 +120,7 @@ class SampleIntake:
             check = checks[source]
             at_rest = partial(self._gnss_at_rest, sample, check) if source in GNSS else None
             if refuse_stuck(check, self.aid[source], sample[name], self.note, at_rest) and \
-                    self.started and check.since <= self._started_at:
+                    self.started and check.since <= self.health.started_at:
                 self.restart_without(source)
             remaining = {key: value for key, value in sample.items() if key != name}
             if any(value in remaining for value, _ in stream.checked):
