@@ -97,7 +97,7 @@ from altfusion.estimators.kalman import (
     running_sum,
     shift_state,
     sparse_dot,
-    update_scalar,
+    update_scalar_in_place,
     white_jerk_noise,
 )
 from altfusion.estimators.streams import ACC, BARO, GPS_VZ, RADAR
@@ -305,16 +305,15 @@ class YangFusionKF(Estimator):
         p = self.params
         x, P = self.x, self.P
         if heights is not None:
-            x, P, _ = update_scalar(x, P, HEIGHT_ROW, self.h_fused - sparse_dot(x, HEIGHT_ROW),
-                                    self.fused_std**2)
+            update_scalar_in_place(x, P, HEIGHT_ROW, self.h_fused - sparse_dot(x, HEIGHT_ROW),
+                                   self.fused_std**2)
         if gps is not None:
             self.accept(self.aid["gps_vz"])
             row = speed_row(lag)
-            x, P, _ = update_scalar(x, P, row, gps["gps_vz"] - sparse_dot(x, row), p.R_gps_vz)
+            update_scalar_in_place(x, P, row, gps["gps_vz"] - sparse_dot(x, row), p.R_gps_vz)
         if acc is not None:
             self.accept(self.aid["acc"])
-            x, P, _ = update_scalar(x, P, ACC_ROW, acc["acc_z"] - x[2], p.R_acc)
-        self.x, self.P = x, P
+            update_scalar_in_place(x, P, ACC_ROW, acc["acc_z"] - x[2], p.R_acc)
 
     # ------------------------------------------------------------------ fault layer
     def _kalman_update_with_offsets(self, heights, gps, lag: float, acc) -> None:
@@ -325,18 +324,16 @@ class YangFusionKF(Estimator):
         x, P = self.x, self.P
         for name, z in (heights or {}).items():
             row = self._height_rows[name]
-            x, P, _ = update_scalar(x, P, row, z - sparse_dot(x, row), self.variances[name])
+            update_scalar_in_place(x, P, row, z - sparse_dot(x, row), self.variances[name])
         if speed:
             row = speed_row(lag)
-            x, P, _ = update_scalar(x, P, row, gps["gps_vz"] - sparse_dot(x, row), p.R_gps_vz)
+            update_scalar_in_place(x, P, row, gps["gps_vz"] - sparse_dot(x, row), p.R_gps_vz)
         if acc is not None:
             self.accept(self.aid["acc"])
             check = self.acc_check
             check.sample(acc["acc_z"])
             R_acc = p.R_acc * check.inflation
-            x, P, _ = update_scalar(x, P, ACC_BIAS_ROW, acc["acc_z"] - x[2] - x[ACC_BIAS],
-                                    R_acc)
-        self.x, self.P = x, P
+            update_scalar_in_place(x, P, ACC_BIAS_ROW, acc["acc_z"] - x[2] - x[ACC_BIAS], R_acc)
 
     def _speed_passes(self, vz: float, lag: float) -> bool:
         """The gate on the GPS vertical speed against the predicted speed at its instant,
