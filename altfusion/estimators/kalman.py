@@ -117,7 +117,19 @@ def predict_constant_acceleration(x: Vector, P: Matrix, dt: float, Q: Matrix,
     With such states Q is given over all of them (n x n).
 
     P and Q must be symmetric; P⁻ is, exactly (its upper triangle is mirrored, and the
-    constant states' block P + Q is the same float on either side of the diagonal)."""
+    constant states' block P + Q is the same float on either side of the diagonal). Returns
+    x⁻ and P⁻, new lists (:func:`predict_constant_acceleration_in_place` writes them into
+    x and P)."""
+    x_new, P_new = list(x), _rows(P)
+    predict_constant_acceleration_in_place(x_new, P_new, dt, tuple(map(tuple, Q)))
+    return x_new, P_new
+
+
+def predict_constant_acceleration_in_place(x: list[float], P: list[list[float]], dt: float,
+                                           Q: tuple[tuple[float, ...], ...]) -> None:
+    """:func:`predict_constant_acceleration` written into ``x`` and ``P`` themselves, for a
+    filter whose x and P no one else holds (Q as :func:`constant_states_noise` gives it):
+    each entry of P is read before it is written, the same floats."""
     h, v, a = x[0], x[1], x[2]
     P0, P1, P2 = P[0], P[1], P[2]
     p00, p01, p02, p11, p12, p22 = P0[0], P0[1], P0[2], P1[1], P1[2], P2[2]
@@ -134,25 +146,22 @@ def predict_constant_acceleration(x: Vector, P: Matrix, dt: float, Q: Matrix,
     m11 = r11 + dt * r12 + Q1[1]
     m12 = r12 + Q1[2]
     m22 = p22 + Q2[2]
-    x_new = [h + dt * v + half * a, v + dt * a, a]
-    M0, M1, M2 = [m00, m01, m02], [m01, m11, m12], [m02, m12, m22]
-    rows = [M0, M1, M2]
-    n = len(x)
-    for k in range(3, n):                     # the constant states (plain loops: cheaper than
+    x[0] = h + dt * v + half * a
+    x[1] = v + dt * a
+    P0[0], P0[1], P0[2] = m00, m01, m02
+    P1[0], P1[1], P1[2] = m01, m11, m12
+    P2[0], P2[1], P2[2] = m02, m12, m22
+    for k in range(3, len(x)):                # the constant states (plain loops: cheaper than
         P_k, Q_k = P[k], Q[k]                 # a comprehension's frame at these sizes)
         p0, p1, p2 = P0[k], P1[k], P2[k]
         d0 = p0 + dt * p1 + half * p2 + Q0[k]     # F₃ times the constant states' columns
         d1 = p1 + dt * p2 + Q1[k]
         d2 = p2 + Q2[k]
-        M0.append(d0)
-        M1.append(d1)
-        M2.append(d2)
-        row = [d0, d1, d2]
-        for j in range(3, n):
-            row.append(P_k[j] + Q_k[j])
-        rows.append(row)
-        x_new.append(x[k])
-    return x_new, rows
+        P0[k] = P_k[0] = d0
+        P1[k] = P_k[1] = d1
+        P2[k] = P_k[2] = d2
+        for j in range(3, len(x)):            # row k's own entries, read before written
+            P_k[j] = P_k[j] + Q_k[j]
 
 
 def predict_height_and_speed(x: Vector, P: Matrix, dt: float, acceleration: float,

@@ -92,7 +92,7 @@ from altfusion.estimators.kalman import (
     constant_states_noise,
     decorrelate,
     diagonal,
-    predict_constant_acceleration,
+    predict_constant_acceleration_in_place,
     quadratic_form,
     running_sum,
     shift_state,
@@ -254,7 +254,7 @@ class YangFusionKF(Estimator):
             self._Q_inflation = check.inflation
             self._Q = constant_states_noise(
                 white_jerk_noise(dt, self.params.jerk_psd * check.inflation), self._walks)
-        self.x, self.P = predict_constant_acceleration(self.x, self.P, dt, self._Q)
+        predict_constant_acceleration_in_place(self.x, self.P, dt, self._Q)
 
     def fuse_samples(self, samples) -> None:
         """Gate and store the new heights, fuse them at a benchmark sample (eqs. 5-8), then
