@@ -105,7 +105,7 @@ from altfusion.estimators.kalman import (
     quadratic_form,
     rederive,
     shift_state,
-    update_scalar,
+    update_scalar_in_place,
     update_scalar_of,
 )
 from altfusion.estimators.noise_check import WINDOW, NoiseCheck
@@ -652,7 +652,7 @@ class AltitudeEKF(Estimator):
             self._range_rejected_since.pop(source, None)
             if source == self._reference:
                 self._reference_rejected_since = None
-            self.x, self.P, _ = update_scalar(self.x, self.P, row, y, R + slow_R)
+            update_scalar_in_place(self.x, self.P, row, y, R + slow_R)
             if source == self._reference:
                 self._reference_information += information(R + slow_R)
         if self.handover is not None:
@@ -670,7 +670,7 @@ class AltitudeEKF(Estimator):
         S = self.P[V][V] + (2.0 * delta * self.P[V][BA] + delta * delta * self.P[BA][BA]
                             if len(row) > 1 else 0.0) + R
         if self._gate_checked("gps_vz", y, S, R):
-            self.x, self.P, _ = update_scalar(self.x, self.P, row, y, R)
+            update_scalar_in_place(self.x, self.P, row, y, R)
 
     def _ground_effect(self, y: float) -> float:
         """PX4's ground-effect dead zone: near the ground a negative baro innovation down to
