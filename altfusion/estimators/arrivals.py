@@ -76,15 +76,18 @@ class Arrivals(Restorable):
             max_delay: float) -> dict[Any, dict[str, float]]:
         """The samples of ``owner``'s ``streams`` (the estimator's constants, in the order
         this object was made with) to fuse at ``now``: the new ones not stamped ahead of the
-        clock and the held ones now due, by stream."""
+        clock and the held ones now due, by stream. The inputs are read from ``owner``'s
+        instance dict, where the FMU adapter sets them (a compiled ``getattr`` looks the
+        name up on the class first)."""
         self.flags = 0
+        inputs: dict[str, Any] = owner.__dict__
         samples: dict[Any, dict[str, float]] = {}
         due_by = now + 1e-9 * max(1.0, abs(now))       # not ahead of the clock (rounding aside)
         for index, intake in enumerate(self.streams):
             stream = streams[index]
-            count = getattr(owner, intake.count_input)
+            count = inputs[intake.count_input]
             if count != intake.last_count:
-                sample = self._new_sample(owner, stream, intake, count, now, max_lead,
+                sample = self._new_sample(owner, inputs, stream, intake, count, now, max_lead,
                                           max_delay)
                 if sample is not None:
                     if sample[intake.time_input] <= due_by:   # the usual case: fused at once
@@ -99,23 +102,24 @@ class Arrivals(Restorable):
                 samples[stream] = held
         return samples
 
-    def _new_sample(self, owner: Any, stream: Any, intake: StreamIntake, count: Any,
-                    now: float, max_lead: float, max_delay: float) -> dict[str, float] | None:
+    def _new_sample(self, owner: Any, inputs: dict[str, Any], stream: Any,
+                    intake: StreamIntake, count: Any, now: float, max_lead: float,
+                    max_delay: float) -> dict[str, float] | None:
         """The sample of ``stream``, whose count changed to ``count``, if it is valid, finite,
-        plausible and stamped in time for ``now``, else None."""
+        plausible and stamped in time for ``now``, else None (``inputs``: ``owner``'s)."""
         prefix = intake.prefix
         last = intake.last_count
         intake.last_count = count
         if count > last + 1:
             owner.note(f"{prefix}: {count - last - 1} sample(s) arrived between two "
                        f"estimator steps; only the latest is fused", f"{prefix} skipped")
-        if intake.valid_input and not getattr(owner, intake.valid_input):
+        if intake.valid_input and not inputs[intake.valid_input]:
             owner.frame_invalid(stream)
             return None
         sample: dict[str, float] = {}
         all_finite = True
         for name in intake.fields:
-            value = float(getattr(owner, name))
+            value = float(inputs[name])
             sample[name] = value
             if not finite(value):
                 all_finite = False
