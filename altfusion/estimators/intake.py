@@ -107,8 +107,8 @@ class SampleIntake:
         gnss = samples.get(self.gnss_speed_stream) if self.gnss_speed_stream else None
         if gnss is not None:
             self._watch_receiver(gnss)
-        if stuck.gnss is not None:
-            self._watch_baro(samples)
+        if stuck.baro_followed():
+            self._follow_baro(samples)
         if not found:
             stuck.found = ()
             return samples
@@ -129,22 +129,16 @@ class SampleIntake:
                 del samples[stream]
         return samples
 
-    def _watch_baro(self, samples: dict[Stream, dict[str, float]]) -> None:
-        """Follow the baro's heights while a GNSS reading repeats (:meth:`_gnss_at_rest`),
-        from its first repetition on (restarted when the GNSS's readings change); a stuck
-        baro shows nothing."""
+    def _follow_baro(self, samples: dict[Stream, dict[str, float]]) -> None:
+        """Follow the baro's heights while a GNSS reading repeats (:meth:`_gnss_at_rest`;
+        :meth:`~.stuck.StuckReadings.baro_followed`, which forgets them when the GNSS's
+        readings change); a stuck baro shows nothing."""
         stuck = self.stuck
-        run = stuck.baro_run
-        speed = stuck.gnss_speed
-        if stuck.gnss.repeats == 0 and (speed is None or speed.repeats == 0):
-            if run.n:
-                run.restart()
-            return
         baro = samples.get(self.baro_stream)
         if baro is None or stuck.checks["baro"].repeats >= stuck.checks["baro"].limit:
             return
-        run.follow(baro["baro_time"], baro["baro_h"], self.baro_height_sigma,
-                   self.params.gate_sigma)
+        stuck.baro_run.follow(baro["baro_time"], baro["baro_h"], self.baro_height_sigma,
+                              self.params.gate_sigma)
 
     def _watch_receiver(self, gnss: dict[str, float]) -> None:
         """Follow the GNSS receiver's heights while its vertical speed reads exactly 0,

@@ -209,6 +209,16 @@ class StuckReadings(Restorable):
         self.found: tuple[str, ...] = ()
         """The sources whose reading was stuck in the last step."""
 
+    def baro_followed(self) -> bool:
+        """True while a GNSS reading (its height, or its vertical speed) repeats: the baro's
+        heights are then followed in :attr:`baro_run`; False otherwise, the run forgotten."""
+        gnss, speed = self.gnss, self.gnss_speed
+        if gnss is not None and (gnss.repeats or (speed is not None and speed.repeats)):
+            return True
+        if self.baro_run.n:
+            self.baro_run.restart()
+        return False
+
     def find(self, samples: dict[Any, dict[str, float]], now: float,
              ) -> list[tuple[Any, str, str]]:
         """The stuck readings of a step's ``samples`` (by stream: each stream's ``checked``

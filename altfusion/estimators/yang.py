@@ -380,15 +380,16 @@ class YangFusionKF(Estimator):
     def _gate(self, name: str, z: float) -> bool:
         """True if the height sample may enter the fusion (always before the filter starts):
         z - H x against H P Hᵀ + σ_i² (H with the sensor's offset in the fault layer)."""
+        source = self.aid[name]
         if not self.started:
-            self.accept(self.aid[name])
+            self.accept(source)
             return True
-        P = self.P
-        row = self._height_rows[name]
-        variance = P[0][0] if len(row) == 1 else \
-            P[0][0] + 2.0 * P[0][row[1][0]] + P[row[1][0]][row[1][0]]
-        return self.gate(self.aid[name], z - sparse_dot(self.x, row),
-                         variance + self.variances[name],
+        P, row = self.P, self._height_rows[name]
+        variance = P[0][0]
+        if len(row) > 1:                                    # h + offset k
+            k = row[1][0]
+            variance = P[0][0] + 2.0 * P[0][k] + P[k][k]
+        return self.gate(source, z - sparse_dot(self.x, row), variance + self.variances[name],
                          self.params.gate_sigma) is FUSED
 
     def _initial_covariance(self, height_variance: float) -> list[list[float]]:
