@@ -891,6 +891,24 @@ def test_ecos_command_line_host_runs_every_fmu_in_a_proxy_process(ssp_files, eng
         assert np.abs(proxy[name] - in_process[name][:rows]).max() <= 0.5e-6 + 2e-11, name
 
 
+def test_the_command_line_host_records_the_last_row_and_leaves_nothing_in_tmp(tmp_path):
+    """``ecos simulate`` adds its steps up in floats: asked to stop at 1 s, yang2020 (steps of
+    0.01, 0.1 and 0.2 s) stopped a step short and the run failed ("10 rows, expected 11").
+    And ECOS unpacks the archive and each proxyfmu its FMU and socket in the temporary
+    folder, and leaves them: a run leaves nothing in its TMPDIR."""
+    scratch = tmp_path / "tmp"
+    scratch.mkdir()
+    csv = tmp_path / "proxy.csv"
+    done = subprocess.run([sys.executable, "-m", "altfusion.interop", "run", "--engine",
+                           "ecos-proxy", "--stop", "1", "--csv", str(csv),
+                           str(MODELS / "yang2020.ssp")],
+                          capture_output=True, text=True, timeout=300, cwd=ROOT,
+                          env={**os.environ, "TMPDIR": str(scratch)})
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert np.array_equal(Results.from_csv(csv).time, np.round(np.arange(11) * 0.1, 12))
+    assert list(scratch.iterdir()) == []
+
+
 def test_without_preloaded_libpython_the_proxy_cannot_load_the_fmus(ssp_files, tmp_path):
     """The documented requirement is real: pythonfmu's library takes Python from its host."""
     from altfusion.interop.proxy import ecos_binaries, proxy_ssp

@@ -47,8 +47,8 @@ def run_engine(engine: str, ssp: Path, stop_time: float | None = None,
 
 
 def main(argv: list[str] | None = None) -> int:
-    from altfusion.cosim.instances import release_mapped_pythonfmu_state
-    from altfusion.interop.engines import ENGINES
+    from altfusion.cosim.instances import CosimError, release_mapped_pythonfmu_state
+    from altfusion.interop.engines import ENGINES, EngineError
 
     atexit.register(release_mapped_pythonfmu_state)
     parser = argparse.ArgumentParser(prog="python -m altfusion.interop",
@@ -68,14 +68,21 @@ def main(argv: list[str] | None = None) -> int:
     fmu.add_argument("--input", type=Path, default=None, help="input table (.npy)")
     fmu.add_argument("--csv", type=Path, required=True)
     args = parser.parse_args(argv)
-    if args.command == "run":
-        results = run_engine(args.engine, args.system, args.stop, args.osp)
-    else:
-        from altfusion.interop.container import simulate_container
+    try:
+        if args.command == "run":
+            results = run_engine(args.engine, args.system, args.stop, args.osp)
+        else:
+            from altfusion.interop.container import simulate_container
 
-        inputs = np.load(args.input) if args.input is not None else None
-        results = simulate_container(args.fmu, args.step, args.stop, args.output,
-                                     inputs=inputs)
+            inputs = np.load(args.input) if args.input is not None else None
+            results = simulate_container(args.fmu, args.step, args.stop, args.output,
+                                         inputs=inputs)
+    except EngineError as error:                # the engine's run failed: its own words
+        print(f"error: {error}", file=sys.stderr)
+        return 1
+    except (CosimError, OSError, ValueError) as error:   # a bad file, system or value
+        print(f"error: {error}", file=sys.stderr)
+        return 2
     results.to_csv(args.csv)
     return 0
 

@@ -122,7 +122,10 @@ def run_ecos_proxy(ssp: Path, system: SystemSpec, fmu_paths: dict[str, Path],
     recording = Recording.of(system, fmu_paths, stop_time)
     reject_bad_parameters(system, fmu_paths)
     binaries = ecos_binaries()
-    stop = recording.clock.time((recording.rows - 1) * recording.every)
+    # ECOS adds its steps up in floats: asked to stop at the last row's time, it can stop a
+    # step short of it (yang2020 to 1 s: 10 rows of 11); half a step past, it writes that
+    # row, and the rows past the recording's are dropped
+    stop = recording.clock.time((recording.rows - 1) * recording.every) + 0.5 * system.base_step
     with tempfile.TemporaryDirectory(prefix="altfusion_ecos_proxy_") as work:
         work = Path(work)
         proxied = proxy_ssp(ssp, work / f"{system.name}.ssp")
@@ -132,7 +135,10 @@ def run_ecos_proxy(ssp: Path, system: SystemSpec, fmu_paths: dict[str, Path],
                    "--csvConfig", str(config), "--noParallel", "--logLevel", "warn"]
         if SSP_PARAMETER_SET in parameter_set_names(ssp):
             command += ["--parameterSet", SSP_PARAMETER_SET]
-        completed = subprocess.run(command, cwd=work, env={**os.environ, **python_environment()},
+        # TMPDIR: ECOS unpacks the archive and each proxyfmu its FMU and socket there, and
+        # leaves them (1.3 MB a run): in the work folder they go with it
+        completed = subprocess.run(command, cwd=work,
+                                   env={**os.environ, **python_environment(), "TMPDIR": str(work)},
                                    capture_output=True, text=True, timeout=timeout)
         output = work / f"{system.name}.csv"
         if completed.returncode != 0 or not output.exists():
