@@ -14,7 +14,7 @@ from altfusion.estimators.kalman import (
     joseph_first_of_two,
     limit_variance,
     move_datum,
-    predict_constant_acceleration,
+    predict_constant_acceleration_in_place,
     predict_height_and_speed,
     predict_sparse,
     quadratic_form,
@@ -202,7 +202,8 @@ def test_scalar_constant_acceleration_predict_is_the_matrix_one():
         F = np.array([[1.0, dt, dt * dt / 2], [0.0, 1.0, dt], [0.0, 0.0, 1.0]])
         Q = np.array(white_jerk_noise(dt, 10 ** rng.uniform(-3, 1)))
         P, x = _random_covariance(rng, 3), 100 * rng.standard_normal(3)
-        x_s, P_s = predict_constant_acceleration(tuple(x), _as_tuples(P), dt, _as_tuples(Q))
+        x_s, P_s = x.tolist(), P.tolist()
+        predict_constant_acceleration_in_place(x_s, P_s, dt, _as_tuples(Q))
         x_m, P_m = predict(x, P, F, Q)
         np.testing.assert_allclose(x_s, x_m, rtol=1e-12, atol=1e-12 * np.abs(x).max())
         np.testing.assert_allclose(P_s, P_m, rtol=1e-12, atol=1e-12 * np.abs(P_m).max())
@@ -253,7 +254,8 @@ def test_scalar_predict_with_constant_states_is_the_matrix_one(constant):
                                            walks))
         assert np.array_equal(np.diag(Q)[3:], walks) and np.count_nonzero(Q[3:, :3]) == 0
         P, x = _random_covariance(rng, n), 100 * rng.standard_normal(n)
-        x_s, P_s = predict_constant_acceleration(tuple(x), _as_tuples(P), dt, _as_tuples(Q))
+        x_s, P_s = x.tolist(), P.tolist()
+        predict_constant_acceleration_in_place(x_s, P_s, dt, _as_tuples(Q))
         x_m, P_m = predict(x, P, F, Q)
         np.testing.assert_allclose(x_s, x_m, rtol=1e-12, atol=1e-12 * np.abs(x).max())
         np.testing.assert_allclose(P_s, P_m, rtol=1e-12, atol=1e-12 * np.abs(P_m).max())

@@ -18,7 +18,8 @@ prediction copy what they read into lists of their annotated types (P's rows, H'
 x) and loop over indices: compiled, such a loop reads unboxed floats from a list directly,
 where the same loop over a ``Sequence``, or a ``map`` over ``operator`` functions, calls
 back into the interpreter for every element; interpreted, the copies cost a C-level
-``list()`` each.
+``list()`` each. A filter that owns its x and P (no one else holds them) updates them in
+place instead (the ``_in_place`` forms: the same floats, no copy).
 """
 # ruff: noqa: B905  (the scalar forms zip sequences of equal lengths by construction; a
 # zip(..., strict=...) is a keyword call, which costs more than a short row's arithmetic)
@@ -107,29 +108,20 @@ def white_jerk_noise(dt: float, jerk_psd: float) -> Matrix:
     )
 
 
-def predict_constant_acceleration(x: Vector, P: Matrix, dt: float, Q: Matrix,
-                                  ) -> tuple[list[float], list[list[float]]]:
-    """The time update for the constant-acceleration model of (position, speed, acceleration),
-    F = [[1, dt, dt²/2], [0, 1, dt], [0, 0, 1]], written out: x⁻ = F x, P⁻ = F P Fᵀ + Q.
+def predict_constant_acceleration_in_place(x: list[float], P: list[list[float]], dt: float,
+                                           Q: tuple[tuple[float, ...], ...]) -> None:
+    """In place: the time update for the constant-acceleration model of (position, speed,
+    acceleration), F = [[1, dt, dt²/2], [0, 1, dt], [0, 0, 1]], written out: x⁻ = F x,
+    P⁻ = F P Fᵀ + Q, into ``x`` and ``P`` (a filter's own: each entry of P is read before it
+    is written).
 
     States after the first three (biases) are constant: F = diag(F₃, I), so their own block
     of P only gains their block of Q, and their covariances with the first three move by F₃.
-    With such states Q is given over all of them (n x n).
+    With such states Q is given over all of them (n x n, as :func:`constant_states_noise`
+    gives it).
 
     P and Q must be symmetric; P⁻ is, exactly (its upper triangle is mirrored, and the
-    constant states' block P + Q is the same float on either side of the diagonal). Returns
-    x⁻ and P⁻, new lists (:func:`predict_constant_acceleration_in_place` writes them into
-    x and P)."""
-    x_new, P_new = list(x), _rows(P)
-    predict_constant_acceleration_in_place(x_new, P_new, dt, tuple(map(tuple, Q)))
-    return x_new, P_new
-
-
-def predict_constant_acceleration_in_place(x: list[float], P: list[list[float]], dt: float,
-                                           Q: tuple[tuple[float, ...], ...]) -> None:
-    """:func:`predict_constant_acceleration` written into ``x`` and ``P`` themselves, for a
-    filter whose x and P no one else holds (Q as :func:`constant_states_noise` gives it):
-    each entry of P is read before it is written, the same floats."""
+    constant states' block P + Q is the same float on either side of the diagonal)."""
     h, v, a = x[0], x[1], x[2]
     P0, P1, P2 = P[0], P[1], P[2]
     p00, p01, p02, p11, p12, p22 = P0[0], P0[1], P0[2], P1[1], P1[2], P2[2]
@@ -402,11 +394,11 @@ def _rows(P: Matrix) -> list[list[float]]:
 
 def _gain_step(x: list[float], P: list[list[float]], row: list[float], K: list[float],
                S: float, innovation: float) -> tuple[list[float], list[list[float]]]:
-    """In place, on copies of x and P: x + K y and the Joseph form P - (K rᵀ + r Kᵀ) +
-    S K Kᵀ of a scalar update of gain K (r = P Hᵀ, S its innovation variance) for a
-    symmetric P: the upper triangle computed and mirrored, each entry's sum being the same
-    float for (a, b) and (b, a) (entry (a, b), b ≥ a, is read before anything is written
-    to it). Plain loops over indices: compiled, they run on unboxed floats; interpreted,
+    """In place, on x and P (the caller's copies, or a filter's own): x + K y and the Joseph
+    form P - (K rᵀ + r Kᵀ) + S K Kᵀ of a scalar update of gain K (r = P Hᵀ, S its innovation
+    variance) for a symmetric P: the upper triangle computed and mirrored, each entry's sum
+    being the same float for (a, b) and (b, a) (entry (a, b), b ≥ a, is read before anything
+    is written to it). Plain loops over indices: compiled, they run on unboxed floats; interpreted,
     a comprehension's frame (Python 3.11) would cost more than the arithmetic it saves."""
     n = len(K)
     for a in range(n):
